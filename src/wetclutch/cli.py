@@ -1,0 +1,128 @@
+"""The ``wetclutch`` command line.
+
+Every bad input ends in one line on stderr, ``wetclutch: error: ...``, and exit
+code 2; output directories are written whole or not at all.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from typing import NoReturn
+
+from . import params as params_mod
+from .errors import WetclutchError
+from .output import atomic_dir, write_json
+from .scenarios import SCENARIOS, simulate
+
+EXIT_USAGE = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+
+
+def _param_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--param-file", metavar="F.toml", help="TOML parameter file (any subset of the parameters)")
+    p.add_argument(
+        "--set",
+        dest="sets",
+        action="append",
+        default=[],
+        metavar="PATH=VALUE",
+        help="override one parameter, e.g. driveline.ratio=0.6 (repeatable; VALUE is a TOML literal)",
+    )
+
+
+def _load_params(args: argparse.Namespace) -> params_mod.Params:
+    overrides = dict(params_mod.parse_set(s) for s in args.sets)
+    return params_mod.load(args.param_file, overrides)
+
+
+def _cmd_simulate(args: argparse.Namespace) -> None:
+    from .plotting import plot_signals
+
+    p = _load_params(args)
+    if args.t_end is not None and not args.t_end > 0:
+        raise WetclutchError(f"--t-end must be > 0 (got {args.t_end})")
+    opts = {} if args.dt_out is None else {"dt_out": args.dt_out}
+    res = simulate(args.scenario, p, args.t_end, **opts)
+    with atomic_dir(args.out) as d:
+        res.signals.to_csv(d / "signals.csv", index=False, float_format="%.10g")
+        write_json(d / "summary.json", {"scenario": res.scenario, **res.summary})
+        plot_signals(res.signals, res.scenario, d / "signals.png", title=f"wetclutch {res.scenario}")
+        (d / "params.toml").write_text(params_mod.to_toml(p))
+    s = res.summary
+    line = f"{res.scenario}: {len(res.signals)} samples -> {args.out}"
+    if s.get("t_sync") is not None:
+        line += f"; t_sync = {s['t_sync']:.4f} s, T_r_peak = {s['T_r_peak']:.2f} N m, E_clutch = {s['E_clutch']:.1f} J"
+    print(line)
+
+
+def _cmd_params_show(args: argparse.Namespace) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    p = _load_params(args)
+    table = Table("parameter", "value", "unit", "description", title="wetclutch parameters")
+    for path, value, unit, desc in params_mod.describe(p):
+        table.add_row(path, f"{value:g}" if isinstance(value, float) else str(value), unit, desc)
+    Console(width=max(100, Console().width)).print(table)
+
+
+def _cmd_params_export(args: argparse.Namespace) -> None:
+    import os
+    import tempfile
+    from pathlib import Path
+
+    p = _load_params(args)
+    target = Path(args.file)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent if str(target.parent) else ".")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(params_mod.to_toml(p))
+        os.replace(tmp, target)
+    except OSError as err:
+        os.unlink(tmp)
+        raise WetclutchError(f"cannot write '{target}': {err.strerror}") from None
+    print(f"wrote {target}")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="wetclutch", description="Wet-clutch driveline model, virtual rig, identification, control.")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    sim = sub.add_parser("simulate", help="run a scenario and write signals.csv, summary.json, signals.png")
+    sim.add_argument("scenario", choices=list(SCENARIOS), help="scenario name")
+    _param_args(sim)
+    sim.add_argument("--t-end", type=float, metavar="S", help="end time, s (default: the scenario's)")
+    sim.add_argument("--dt-out", type=float, metavar="S", help="output interval, s (default 0.001)")
+    sim.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced as a whole)")
+    sim.set_defaults(func=_cmd_simulate)
+
+    par = sub.add_parser("params", help="show or export the parameter record")
+    psub = par.add_subparsers(dest="params_command", required=True, parser_class=_Parser)
+    show = psub.add_parser("show", help="print every parameter with its unit and description")
+    _param_args(show)
+    show.set_defaults(func=_cmd_params_show)
+    exp = psub.add_parser("export", help="write a complete TOML parameter file")
+    exp.add_argument("file", metavar="F.toml")
+    _param_args(exp)
+    exp.set_defaults(func=_cmd_params_export)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        args.func(args)
+    except WetclutchError as err:
+        print(f"wetclutch: error: {err}", file=sys.stderr)
+        return EXIT_USAGE
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,205 @@
+"""The validated parameter record of the rig, addressed by dotted paths.
+
+Parameters live in sections (``driveline``, ``clutch``, ``engage``); each has a
+unit, a one-line description and a physical range. They are read from TOML
+files (``--param-file``), overridden one by one (``--set driveline.ratio=0.6``,
+the value read as a TOML literal), printed (``wetclutch params show``) and
+written back complete (``wetclutch params export``).
+
+Default values and why (see also ``docs/parameters.md``):
+
+* ``J_p`` 1.2 kg m^2 and ``J_s`` 6.5 kg m^2. The study gives no inertias. The
+  primary flywheel stands for an engine-side flywheel of a passenger-car
+  flywheel hybrid (a steel disc of about 0.45 m and 50 kg has 1.2 kg m^2).
+  The secondary flywheel stands for the vehicle seen from the CVT output: a
+  1250 kg car with 0.29 m wheels behind a final drive of 4 has
+  1250 * 0.29^2 / 4^2 = 6.6 kg m^2.
+* ``J_1`` 1e-3 kg m^2: the clutch output hub and CVT input, which the study
+  neglects. A body without inertia cannot slide against a spring, so the
+  engine keeps this small inertia; ``tests/test_driveline.py`` shows that
+  dividing it by 10 moves no reported figure by more than 0.5 %.
+* ``ratio`` 0.5 (``w_r / w_1``, an underdrive launch ratio) and ``eta`` 0.95
+  (the study's constant CVT efficiency).
+* ``k_a`` 480 N m/rad: the locked driveline then rings at 2.1 Hz, the study's
+  measured resonance. With power flowing alternately forward and back
+  through the CVT, the half periods use the primary inertia seen through
+  ``eta`` and ``1/eta``; ``k_a = (2.1 pi (sqrt(J_f) + sqrt(J_b)))^2`` with
+  ``J_f``, ``J_b`` the two-mass reduced inertias, which gives 480.6.
+* ``d_a`` 1.5 N m s/rad: about 2 % of critical damping of that mode; the
+  study calls the driveline's damping small and nonlinear (air drag).
+* ``b_1`` 2e-5 and ``b_2`` 5e-5 N m s^2: windage of a disc flywheel, about
+  0.45 N m at 150 rad/s on the primary.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import tomli_w
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from .errors import ParameterError
+
+
+def _f(default: float, unit: str, description: str, **bounds: float) -> Any:
+    return Field(default, description=description, json_schema_extra={"unit": unit}, **bounds)
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False)
+
+
+class Driveline(_Section):
+    """Flywheels, CVT and flexible axle (spec section 2)."""
+
+    J_p: float = _f(1.2, "kg m^2", "primary flywheel inertia", gt=0.0, le=1e3)
+    J_1: float = _f(1e-3, "kg m^2", "clutch output + CVT input inertia (neglected by the study)", gt=0.0, le=1e2)
+    J_s: float = _f(6.5, "kg m^2", "secondary (vehicle-equivalent) flywheel inertia", gt=0.0, le=1e4)
+    b_1: float = _f(2e-5, "N m s^2", "primary air drag coefficient (T = b_1 w|w|)", ge=0.0, le=1.0)
+    b_2: float = _f(5e-5, "N m s^2", "secondary air drag coefficient (T = b_2 w|w|)", ge=0.0, le=1.0)
+    ratio: float = _f(0.5, "-", "CVT speed ratio i = w_r / w_1", gt=0.05, le=20.0)
+    eta: float = _f(0.95, "-", "CVT efficiency, either power-flow direction", gt=0.0, le=1.0)
+    k_a: float = _f(480.0, "N m/rad", "flexible axle torsional stiffness", gt=0.0, le=1e8)
+    d_a: float = _f(1.5, "N m s/rad", "flexible axle damping", ge=0.0, le=1e5)
+    omega_p0: float = _f(150.0, "rad/s", "primary flywheel speed at the start of a run", ge=0.0, le=2000.0)
+
+
+class Clutch(_Section):
+    """Friction behaviour of the wet clutch that the driveline engine needs."""
+
+    peak: float = _f(1.0, "-", "static / sliding torque capacity ratio (breakaway)", ge=1.0, le=3.0)
+
+
+class Engage(_Section):
+    """The ``engage`` scenario: capacity ramp and road load."""
+
+    T_cap: float = _f(40.0, "N m", "clutch torque capacity level reached by the ramp", ge=0.0, le=5e3)
+    t_start: float = _f(0.5, "s", "time the capacity ramp starts", ge=0.0, le=1e3)
+    t_ramp: float = _f(0.3, "s", "duration of the capacity ramp", gt=0.0, le=1e3)
+    T_load: float = _f(10.0, "N m", "road load: brake torque on the secondary flywheel", ge=0.0, le=5e3)
+
+
+class Params(_Section):
+    """All parameters of the rig and its scenarios, SI units."""
+
+    driveline: Driveline = Field(default_factory=Driveline)
+    clutch: Clutch = Field(default_factory=Clutch)
+    engage: Engage = Field(default_factory=Engage)
+
+
+def _one_line(err: ValidationError) -> str:
+    e = err.errors()[0]
+    path = ".".join(str(p) for p in e["loc"])
+    if e["type"] == "extra_forbidden":
+        return f"unknown parameter '{path}'"
+    got = e.get("input")
+    got_s = "" if isinstance(got, dict) else f" (got {got!r})"
+    return f"parameter '{path}': {e['msg']}{got_s}"
+
+
+def _validate(data: dict[str, Any]) -> Params:
+    try:
+        return Params.model_validate(data)
+    except ValidationError as err:
+        raise ParameterError(_one_line(err)) from None
+
+
+def _merge(base: dict[str, Any], path: str, value: Any) -> None:
+    keys = path.split(".")
+    node = base
+    for k in keys[:-1]:
+        nxt = node.get(k)
+        if not isinstance(nxt, dict):
+            raise ParameterError(f"unknown parameter '{path}'")
+        node = nxt
+    if keys[-1] not in node:
+        raise ParameterError(f"unknown parameter '{path}'")
+    node[keys[-1]] = value
+
+
+def load(
+    param_file: str | Path | None = None,
+    overrides: dict[str, Any] | None = None,
+    base: Params | None = None,
+) -> Params:
+    """Build a parameter record: defaults (or ``base``), then ``param_file``, then ``overrides``.
+
+    Parameters
+    ----------
+    param_file
+        A TOML file with any subset of the sections and keys.
+    overrides
+        Dotted path -> value, e.g. ``{"driveline.ratio": 0.6}``.
+
+    Raises
+    ------
+    ParameterError
+        One line naming the offending file or parameter.
+    """
+    data = (base or Params()).model_dump()
+    if param_file is not None:
+        path = Path(param_file)
+        try:
+            text = path.read_text()
+        except OSError as err:
+            raise ParameterError(f"cannot read parameter file '{path}': {err.strerror}") from None
+        try:
+            given = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as err:
+            raise ParameterError(f"parameter file '{path}' is not valid TOML: {err}") from None
+        for dotted, value in _flatten(given).items():
+            _merge(data, dotted, value)
+    for dotted, value in (overrides or {}).items():
+        _merge(data, dotted, value)
+    return _validate(data)
+
+
+def _flatten(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict):
+            out.update(_flatten(v, key + "."))
+        else:
+            out[key] = v
+    return out
+
+
+def parse_set(item: str) -> tuple[str, Any]:
+    """Parse one ``--set path=value`` item; the value is a TOML literal (``1.2``, ``[1, 2]``)."""
+    if "=" not in item:
+        raise ParameterError(f"--set '{item}': expected PATH=VALUE")
+    path, _, raw = item.partition("=")
+    path = path.strip()
+    try:
+        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        raise ParameterError(f"--set {path}: '{raw}' is not a TOML value") from None
+    return path, value
+
+
+def describe(params: Params) -> list[tuple[str, Any, str, str]]:
+    """Rows ``(dotted path, value, unit, description)`` for every parameter."""
+    rows = []
+    for sname, section in params:
+        for fname, info in type(section).model_fields.items():
+            extra = info.json_schema_extra or {}
+            rows.append((f"{sname}.{fname}", getattr(section, fname), str(extra.get("unit", "")), info.description or ""))
+    return rows
+
+
+def to_toml(params: Params) -> str:
+    """A complete TOML file, one commented line per parameter, that :func:`load` reads back identically."""
+    lines = ["# wetclutch parameters, SI units", ""]
+    current = None
+    for path, value, unit, desc in describe(params):
+        section, key = path.split(".", 1)
+        if section != current:
+            if current is not None:
+                lines.append("")
+            lines.append(f"[{section}]")
+            current = section
+        lines.append(f"{tomli_w.dumps({key: value}).strip()}  # [{unit}] {desc}")
+    return "\n".join(lines) + "\n"

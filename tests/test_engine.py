@@ -1,0 +1,142 @@
+"""The hybrid engine against closed-form solutions and exact event instants."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wetclutch import engine
+from wetclutch.network import GROUND, Network, integrate
+from wetclutch.signals import Const, Ramp, Sine, Step
+
+
+def test_two_inertias_constant_capacity_sync_time():
+    # relative deceleration T (1/Ja + 1/Jb) takes the slip from dw to zero
+    Ja, Jb, T, wa = 0.7, 2.3, 13.0, 120.0
+    net = Network()
+    a = net.body("a", Ja, w0=wa)
+    b = net.body("b", Jb, w0=-5.0)
+    net.clutch("c", a, b, T)
+    tr = integrate(net, 10.0)
+    expected = (wa + 5.0) / (T * (1 / Ja + 1 / Jb))
+    assert tr.first_lock("c") == pytest.approx(expected, rel=1e-9)
+    # after lock both turn at the momentum-conserving common speed
+    w_common = (Ja * wa - Jb * 5.0) / (Ja + Jb)
+    assert tr.speed("a")[-1] == pytest.approx(w_common, rel=1e-9)
+    assert tr.speed("b")[-1] == pytest.approx(w_common, rel=1e-9)
+
+
+@pytest.mark.parametrize("eta", [1.0, 0.9])
+def test_clutch_into_lossy_gear_sync_time(eta):
+    # forward power flow: the output inertia is seen through the gear as J_s r^2 / eta
+    Jp, J1, Js, r, T, w0 = 1.2, 0.01, 6.5, 0.5, 40.0, 150.0
+    net = Network()
+    p = net.body("p", Jp, w0=w0)
+    one = net.body("1", J1)
+    s = net.body("s", Js)
+    net.clutch("c", p, one, T)
+    net.gear("g", one, s, r, eta)
+    tr = integrate(net, 10.0)
+    expected = w0 / (T / Jp + T / (J1 + r * r * Js / eta))
+    assert tr.first_lock("c") == pytest.approx(expected, rel=1e-9)
+    assert np.all(np.diff(tr.energies()["dissipated_gear"]) >= -1e-9)
+
+
+def test_breakaway_at_the_right_instant():
+    # locked pair driven by a constant torque; capacity falls linearly until it
+    # can no longer carry the constraint torque T_src * Jb / (Ja + Jb)
+    Ja, Jb, T_src, C0, rate = 1.0, 3.0, 8.0, 20.0, 4.0
+    net = Network()
+    a = net.body("a", Ja)
+    b = net.body("b", Jb)
+    net.source("drive", a, T_src)
+    net.clutch("c", a, b, Ramp(0.0, C0 / rate, C0, 0.0))
+    tr = integrate(net, 4.0)
+    lam = T_src * Jb / (Ja + Jb)
+    t_break = (C0 - lam) / rate
+    ev = tr.events[tr.events[:, 2] != engine.LOCKED]
+    assert ev[0, 0] == pytest.approx(t_break, abs=1e-9)
+    assert ev[0, 2] == 1  # slides forward: a is driven
+    # before breakaway the pair turns together; after, a outruns b
+    i_before = np.searchsorted(tr.t, t_break) - 1
+    assert abs(tr.speed("a")[i_before] - tr.speed("b")[i_before]) < 1e-9
+    assert tr.speed("a")[-1] > tr.speed("b")[-1]
+
+
+def test_brake_holds_until_torque_exceeds_capacity():
+    net = Network()
+    a = net.body("a", 2.0)
+    net.source("drive", a, Ramp(0.0, 1.0, 0.0, 10.0))
+    net.brake("brake", a, 4.0)
+    tr = integrate(net, 2.0)
+    assert tr.events[0, 0] == pytest.approx(0.4, abs=1e-9)
+    w = tr.speed("a")
+    assert np.all(w[tr.t < 0.4] == 0.0)
+    # after breakaway: J w' = 10 t - 4 on [0.4, 1], then 6 N m
+    assert w[-1] == pytest.approx((5 * (1 - 0.16) - 4 * 0.6 + 6.0 * 1.0) / 2.0, rel=1e-8)
+
+
+def test_slow_approach_to_lock_does_not_chatter():
+    # a damper pulls the speeds together exponentially, a weak clutch helps:
+    # slip reaches zero once and stays there
+    net = Network()
+    a = net.body("a", 1.0, w0=1.0)
+    b = net.body("b", 1.0)
+    net.spring("visc", a, b, k=0.0, d=5.0)
+    net.clutch("c", a, b, 1e-3)
+    tr = integrate(net, 10.0)
+    assert tr.stats["mode_switches"] == 1
+    assert tr.first_lock("c") is not None
+
+
+def test_lock_against_oscillating_load_switches_boundedly():
+    # a sinusoidal torque near the static capacity: every period at most one
+    # unlock and one relock, never a burst of switches
+    net = Network()
+    a = net.body("a", 1.0)
+    b = net.body("b", 1.0)
+    net.source("drive", a, Sine(10.0, 1.0))
+    net.clutch("c", a, b, 4.9)
+    tr = integrate(net, 5.0)
+    assert 0 < tr.stats["mode_switches"] <= 4 * 5 + 2
+    assert tr.energy_residual() < 1e-6
+
+
+def test_several_locked_clutches_are_solved_together():
+    # a chain held by a brake at the end: all locked, torques passed through
+    net = Network()
+    b1 = net.body("b1", 1.0)
+    b2 = net.body("b2", 2.0)
+    b3 = net.body("b3", 3.0)
+    net.source("drive", b1, 5.0)
+    net.clutch("c12", b1, b2, 100.0)
+    net.clutch("c23", b2, b3, 100.0)
+    net.brake("brake", b3, 100.0)
+    tr = integrate(net, 0.5)
+    assert np.all(tr.locked("c12") == 1) and np.all(tr.locked("brake") == 1)
+    assert tr.clutch_torque("c12")[-1] == pytest.approx(5.0)
+    assert tr.clutch_torque("c23")[-1] == pytest.approx(5.0)
+    assert tr.clutch_torque("brake")[-1] == pytest.approx(5.0)
+
+
+def test_massless_body_without_rigid_tie_is_an_error():
+    from wetclutch.errors import SimulationError
+
+    net = Network()
+    a = net.body("a", 1.0, w0=1.0)
+    b = net.body("b", 0.0)
+    net.clutch("c", a, b, Step(0.5, 0.0, 1.0))
+    net.spring("s", b, GROUND, 1.0, 1.0)
+    with pytest.raises(SimulationError):
+        integrate(net, 1.0)
+
+
+def test_rerun_does_not_recompile():
+    net = Network()
+    a = net.body("a", 1.0, w0=3.0)
+    b = net.body("b", 1.0)
+    net.clutch("c", a, b, Const(1.0))
+    integrate(net, 1.0)
+    n_sig = len(engine.advance.signatures)
+    integrate(net, 2.0)
+    assert len(engine.advance.signatures) == n_sig
