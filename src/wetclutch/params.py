@@ -91,7 +91,7 @@ class Params(_Section):
 
 def _one_line(err: ValidationError) -> str:
     e = err.errors()[0]
-    path = ".".join(str(p) for p in e["loc"])
+    path = ".".join(str(p) for p in e["loc"]).encode("unicode_escape").decode()
     if e["type"] == "extra_forbidden":
         return f"unknown parameter '{path}'"
     got = e.get("input")
@@ -112,10 +112,12 @@ def _merge(base: dict[str, Any], path: str, value: Any) -> None:
     for k in keys[:-1]:
         nxt = node.get(k)
         if not isinstance(nxt, dict):
-            raise ParameterError(f"unknown parameter '{path}'")
+            raise ParameterError(f"unknown parameter {path!r}")
         node = nxt
     if keys[-1] not in node:
-        raise ParameterError(f"unknown parameter '{path}'")
+        raise ParameterError(f"unknown parameter {path!r}")
+    if isinstance(node[keys[-1]], dict):
+        raise ParameterError(f"'{path}' is a section, not a parameter (name one, e.g. '{path}.{next(iter(node[keys[-1]]))}')")
     node[keys[-1]] = value
 
 
@@ -148,7 +150,8 @@ def load(
         try:
             given = tomllib.loads(text)
         except tomllib.TOMLDecodeError as err:
-            raise ParameterError(f"parameter file '{path}' is not valid TOML: {err}") from None
+            reason = str(err).replace("\n", " ")
+            raise ParameterError(f"parameter file '{path}' is not valid TOML: {reason}") from None
         for dotted, value in _flatten(given).items():
             _merge(data, dotted, value)
     for dotted, value in (overrides or {}).items():
@@ -170,13 +173,13 @@ def _flatten(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
 def parse_set(item: str) -> tuple[str, Any]:
     """Parse one ``--set path=value`` item; the value is a TOML literal (``1.2``, ``[1, 2]``)."""
     if "=" not in item:
-        raise ParameterError(f"--set '{item}': expected PATH=VALUE")
+        raise ParameterError(f"--set {item!r}: expected PATH=VALUE")
     path, _, raw = item.partition("=")
     path = path.strip()
     try:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
-        raise ParameterError(f"--set {path}: '{raw}' is not a TOML value") from None
+        raise ParameterError(f"--set {path!r}: {raw!r} is not a TOML value") from None
     return path, value
 
 

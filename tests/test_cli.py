@@ -1,0 +1,102 @@
+"""The command line: outputs, one-line errors with exit code 2, no half-written directories."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from wetclutch.cli import main
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", "wetclutch.cli", *args], capture_output=True, text=True)
+
+
+def test_simulate_engage_writes_outputs(tmp_path, engage_default):
+    out = tmp_path / "eng"
+    assert main(["simulate", "engage", "--out", str(out)]) == 0
+    df = pd.read_csv(out / "signals.csv")
+    assert list(df.columns[:9]) == ["time", "omega_p", "omega_1", "omega_r", "omega_s", "T_c", "T_r", "T_cap", "locked"]
+    summary = json.loads((out / "summary.json").read_text())
+    for key in ("t_sync", "T_r_peak", "E_clutch", "energy_residual", "mode_switches"):
+        assert key in summary
+    assert summary["t_sync"] == pytest.approx(engage_default.summary["t_sync"], rel=1e-9)
+    np.testing.assert_allclose(df.T_r, engage_default.signals.T_r, rtol=1e-8, atol=1e-8)
+    assert (out / "signals.png").stat().st_size > 10_000
+    # no temporary directories left beside the output
+    assert [p.name for p in tmp_path.iterdir()] == ["eng"]
+
+
+def test_simulate_with_overrides_and_param_file(tmp_path):
+    pf = tmp_path / "p.toml"
+    assert main(["params", "export", str(pf), "--set", "driveline.ratio=0.6"]) == 0
+    out = tmp_path / "o"
+    assert main(["simulate", "engage", "--param-file", str(pf), "--set", "engage.T_cap=60", "--t-end", "5", "--out", str(out)]) == 0
+    used = (out / "params.toml").read_text()
+    assert "ratio = 0.6" in used and "T_cap = 60" in used
+    df = pd.read_csv(out / "signals.csv")
+    assert df.time.iloc[-1] == pytest.approx(5.0)
+
+
+def test_coupled_clutches_columns(tmp_path):
+    out = tmp_path / "cc"
+    assert main(["simulate", "coupled-clutches", "--out", str(out)]) == 0
+    df = pd.read_csv(out / "signals.csv")
+    assert list(df.columns[:5]) == ["time", "J1_w", "J2_w", "J3_w", "J4_w"]
+    assert len(df) == 1501
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (["--set", "driveline.bogus=1"], "unknown parameter 'driveline.bogus'"),
+        (["--set", "driveline.J_p=-2"], "driveline.J_p"),
+        (["--set", "driveline.eta=1.5"], "driveline.eta"),
+        (["--set", "driveline.eta"], "expected PATH=VALUE"),
+        (["--t-end", "-1"], "--t-end"),
+        (["--frobnicate"], "unrecognized arguments"),
+    ],
+)
+def test_bad_input_one_line_exit_2_no_output(tmp_path, args, fragment):
+    out = tmp_path / "never"
+    r = run("simulate", "engage", "--out", str(out), *args)
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and fragment in lines[0], r.stderr
+    assert "Traceback" not in r.stderr
+    assert not out.exists()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_malformed_param_file(tmp_path):
+    pf = tmp_path / "bad.toml"
+    pf.write_text("[driveline]\nJ_p = = 3\n")
+    out = tmp_path / "never"
+    r = run("simulate", "engage", "--param-file", str(pf), "--out", str(out))
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+    assert "not valid TOML" in r.stderr and not out.exists()
+
+
+def test_unknown_scenario():
+    r = run("simulate", "warp-drive", "--out", "x")
+    assert r.returncode == 2 and "invalid choice" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_failed_run_leaves_previous_output_intact(tmp_path):
+    out = tmp_path / "keep"
+    out.mkdir()
+    (out / "marker").write_text("old")
+    r = run("simulate", "engage", "--out", str(out), "--set", "driveline.k_a=-1")
+    assert r.returncode == 2
+    assert (out / "marker").read_text() == "old"
+
+
+def test_params_show_lists_units(capsys):
+    assert main(["params", "show"]) == 0
+    text = capsys.readouterr().out
+    assert "driveline.k_a" in text and "N m/rad" in text
