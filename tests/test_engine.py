@@ -140,3 +140,23 @@ def test_rerun_does_not_recompile():
     n_sig = len(engine.advance.signatures)
     integrate(net, 2.0)
     assert len(engine.advance.signatures) == n_sig
+
+
+@pytest.mark.parametrize(("T_in", "moves"), [(10.0, False), (12.0, True)])
+def test_lossy_gear_at_standstill_sticks_within_its_friction(T_in, moves):
+    # ratio 1, eta 0.8, output loaded with -9 N m: the gear's losses can hold an input
+    # torque between 0.8 * 9 = 7.2 and 9 / 0.8 = 11.25 N m without moving
+    net = Network()
+    i = net.body("in", 1.0)
+    o = net.body("out", 2.0)
+    net.gear("g", i, o, 1.0, 0.8)
+    net.source("drive", i, T_in)
+    net.source("load", o, -9.0)
+    tr = integrate(net, 1.0)
+    w = tr.speed("out")
+    if moves:
+        # forward power flow (torque on the input -lam / eta): (eta J_in + J_out) a = eta T_in - 9
+        assert w[-1] == pytest.approx((0.8 * T_in - 9.0) / (0.8 * 1.0 + 2.0), rel=1e-9)
+    else:
+        assert np.all(w == 0.0) and np.all(tr.speed("in") == 0.0)
+    assert tr.energy_residual() < 1e-9
