@@ -10,7 +10,6 @@ Bodies: primary ``p`` (speed ``w_p``), clutch-output / CVT-input body ``1``
 ``phi``) and the secondary ``s`` (speed ``w_s``) braked by the road load.
 State vector: ``y = [w_p, w_1, phi, w_s]``.
 """
-import math
 import time
 
 import numpy as np
@@ -157,7 +156,7 @@ if __name__ == "__main__":
     wall = (time.perf_counter() - start) / n_runs
     print(f"RK45 rtol=1e-8: t_sync={res['t_sync']!r} s, omega_p_end={res['omega_p_end']:.6f}, "
           f"omega_s_end={res['omega_s_end']:.6f}, n_events={res['n_events']}, "
-          f"steps={res['t'].size}, wall={wall * 1e3:.1f} ms/run")
+          f"points={res['t'].size}, wall={wall * 1e3:.1f} ms/run")
     for method in ("DOP853", "LSODA"):
         ref = engage_scipy(DEFAULTS, rtol=1e-12, atol=1e-13, method=method)
         rel = abs(ref["t_sync"] - res["t_sync"]) / ref["t_sync"]
