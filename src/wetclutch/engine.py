@@ -38,9 +38,13 @@ from numba import njit
 
 from .signals import CONST, EXTERNAL, RAMP, SINE, STEP, TABLE
 
-# error_model='numpy': IEEE division semantics, no Python zero-division checks in hot loops
-_jit = njit(cache=True, error_model="numpy")
-_jit_inline = njit(cache=True, error_model="numpy", inline="always")
+# error_model='numpy': IEEE division semantics, no Python zero-division checks in hot loops.
+# _nrt=False: the core allocates nothing (all buffers live in the Workspace), so numba's
+# reference counting is pure overhead; it cost about 60 % of a right-hand-side evaluation.
+# fastmath: only contraction to FMA and reassociation; inf/nan semantics are kept (events use inf).
+_FAST = {"contract", "reassoc", "nsz", "arcp"}
+_jit = njit(cache=True, error_model="numpy", _nrt=False, fastmath=_FAST)
+_jit_inline = njit(cache=True, error_model="numpy", inline="always", _nrt=False, fastmath=_FAST)
 
 FREE, LOCKED, UNDECIDED = 0, 2, 99  # clutch modes; +1 / -1 are sliding forward / backward
 STUCK = 3  # gear held at standstill (+3 / -3: sign of the held output torque); +1 / -1: power flowing forward / back
@@ -123,6 +127,13 @@ def signal_value(k, t, left, sig, tab, ext):
 
 
 @_jit_inline
+def _copy(dst, src):
+    # an explicit loop: slice assignment may allocate a temporary, which needs NRT
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@_jit_inline
 def _poly(c, row, s):
     v = 0.0
     for j in range(c.shape[1]):
@@ -187,11 +198,13 @@ def _lu_solve(A, piv, b, n):
 
 
 @_jit_inline
-def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, refactor):
+def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, refactor):
     """Derivatives ``dx`` and element torques ``aux`` for fixed modes; False if singular.
 
-    The constraint matrix depends on the modes only, so its LU factors are kept
-    in ``A``/``piv`` between mode changes; ``refactor`` rebuilds them.
+    The constraint matrix depends on the modes only, so it is factored when
+    ``refactor`` is set and the columns of its inverse that multiply the body
+    torques are kept in ``Gt`` (transposed); every other call is then a small
+    matrix-vector product instead of a triangular solve.
 
     ``aux`` layout: clutch torques (nc) | capacity signals (nc) | gear output
     torques (ng) | spring torques (ns) | gear input torques (ng).
@@ -201,11 +214,11 @@ def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, refactor):
     nc = net.cl_a.shape[0]
     ng = net.gr_in.shape[0]
     e0 = nb + ns
-    for k in range(nb):
-        z[k] = -net.drag[k] * x[k] * abs(x[k])
     p_drag = 0.0
     for k in range(nb):
-        p_drag += net.drag[k] * x[k] * x[k] * abs(x[k])
+        tau = net.drag[k] * x[k] * abs(x[k])
+        z[k] = -tau
+        p_drag += tau * x[k]
     p_src = 0.0
     for j in range(net.src_body.shape[0]):
         tau = signal_value(net.src_sig[j], t, left, net.sig, net.tab, ext)
@@ -245,13 +258,10 @@ def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, refactor):
                 z[b] += tau
             aux[j] = tau
             dx[e0 + j] = tau * slip
-    nstuck = 0
+    n = nb + nlock + ng
     for g in range(ng):
         if abs(grm[g]) == STUCK:
-            nstuck += 1
-    n = nb + nlock + ng + nstuck
-    for r in range(nb, n):
-        z[r] = 0.0
+            n += 1
     if refactor:
         for r in range(n):
             for c in range(n):
@@ -288,9 +298,20 @@ def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, refactor):
             col += 1
         if not _lu_factor(A, piv, n):
             return False
-    _lu_solve(A, piv, z, n)
-    for k in range(nb):
-        dx[k] = z[k]
+        for c in range(nb):
+            for r in range(n):
+                Gt[c, r] = 0.0
+            Gt[c, c] = 1.0
+            _lu_solve(A, piv, Gt[c], n)
+    # accelerations into dx, constraint torques into z[nb:n] (the right-hand side is zero there)
+    for r in range(n):
+        acc = 0.0
+        for c in range(nb):
+            acc += Gt[c, r] * z[c]
+        if r < nb:
+            dx[r] = acc
+        else:
+            z[r] = acc
     col = nb
     for j in range(nc):
         if clm[j] == LOCKED:
@@ -365,14 +386,13 @@ def _events(x, dx, aux, net, clm, grm, g):
 
 
 @_jit
-def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv):
+def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, released):
     """Decide consistent modes at an event or breakpoint; project newly locked speeds.
 
-    Returns the number of clutch mode changes, or -1 if the system is singular.
+    ``released`` (nc + ng) is scratch space. Returns False if the system is singular.
     """
     nc = net.cl_a.shape[0]
     ng = net.gr_in.shape[0]
-    old = clm.copy()
     t_right = t + 1e-9 * max(1.0, abs(t))
     for j in range(nc):
         a = net.cl_a[j]
@@ -398,8 +418,7 @@ def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv):
         elif abs(grm[k]) == STUCK:
             grm[k] = 1
     # a clutch or gear released in this settle must not be re-locked (no cycling)
-    released = np.zeros(nc, dtype=np.bool_)
-    g_released = np.zeros(ng, dtype=np.bool_)
+    released[:] = 0
     for _ in range(4 * (nc + ng) + 4):
         for k in range(ng):
             if abs(grm[k]) == STUCK:
@@ -421,8 +440,8 @@ def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv):
                         w = 0.5 * (x[a] + x[b])
                     x[a] = w
                     x[b] = w
-        if not _rhs(t, False, x, net, ext, clm, grm, dx, aux, A, z, piv, True):
-            return -1
+        if not _rhs(t, False, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, True):
+            return False
         changed = False
         for k in range(ng):
             o = net.gr_out[k]
@@ -438,11 +457,11 @@ def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv):
                     grm[k] = 1  # the input side drives the output
                 else:
                     continue
-                g_released[k] = True
+                released[nc + k] = 1
                 changed = True
                 break
             p = lam * (x[o] if x[o] != 0.0 else dx[o])
-            if grm[k] * p < 0.0 and not (g_released[k] and x[o] == 0.0):
+            if grm[k] * p < 0.0 and not (released[nc + k] != 0 and x[o] == 0.0):
                 grm[k] = -grm[k]
                 changed = True
         if changed:
@@ -461,12 +480,12 @@ def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv):
                         worst = j
         if worst >= 0:
             clm[worst] = 1 if aux[worst] > 0.0 else -1
-            released[worst] = True
+            released[worst] = 1
             continue
         # a clutch sliding from zero slip must accelerate in its own direction
         for j in range(nc):
             m = clm[j]
-            if (m == 1 or m == -1) and not released[j]:
+            if (m == 1 or m == -1) and released[j] == 0:
                 a = net.cl_a[j]
                 b = net.cl_b[j]
                 if _slip(x, net, j) * m <= 0.0:
@@ -476,11 +495,7 @@ def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv):
                         changed = True
         if not changed:
             break
-    n = 0
-    for j in range(nc):
-        if clm[j] != old[j]:
-            n += 1
-    return n
+    return True
 
 
 # ---------------------------------------------------------------- Dormand-Prince 5(4)
@@ -548,9 +563,13 @@ class Workspace(NamedTuple):
     A: np.ndarray  # LU factors of the constraint matrix for the current modes
     z: np.ndarray
     piv: np.ndarray
+    Gt: np.ndarray  # (nb, nmat) torque-to-solution columns of the inverse constraint matrix
     y_new: np.ndarray
     y_tmp: np.ndarray
     bw: np.ndarray  # (7,) dense-output weights
+    y_old: np.ndarray  # state at the start of the current step
+    clm_before: np.ndarray  # clutch modes before a restart
+    released: np.ndarray  # (nc + ng) scratch for _settle
     evlog: np.ndarray  # (max_events, 3): t, element index, new mode
 
 
@@ -558,7 +577,7 @@ class Workspace(NamedTuple):
 def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
     """State and event functions at ``theta_t`` inside the last step (fixed modes)."""
     _dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
-    _rhs(theta_t, False, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.dx, ws.aux_new, ws.A, ws.z, ws.piv, False)
+    _rhs(theta_t, False, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.dx, ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, False)
     _events(ws.y_tmp, ws.dx, ws.aux_new, net, ws.clm, ws.grm, ws.g_new)
 
 
@@ -568,10 +587,10 @@ def _emit(t, y, ws, net, ext, out_t, out_x, out_aux, out_mode):
     i = ws.istate[1]
     if i >= out_t.shape[0]:
         return
-    _rhs(t, False, y, net, ext, ws.clm, ws.grm, ws.dx, ws.aux_new, ws.A, ws.z, ws.piv, False)
+    _rhs(t, False, y, net, ext, ws.clm, ws.grm, ws.dx, ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, False)
     out_t[i] = t
-    out_x[i, :] = y
-    out_aux[i, :] = ws.aux_new
+    _copy(out_x[i], y)
+    _copy(out_aux[i], ws.aux_new)
     for j in range(ws.clm.shape[0]):
         out_mode[i, j] = ws.clm[j]
     ws.istate[1] = i + 1
@@ -594,13 +613,13 @@ def _log_modes(t, before, ws):
 def _restart(ws, net, ext):
     """Re-decide modes at the current time and refresh the first stage."""
     t = ws.fstate[0]
-    before = ws.clm.copy()
-    if _settle(t, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv) < 0:
+    _copy(ws.clm_before, ws.clm)
+    if not _settle(t, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.Gt, ws.released):
         return False
-    _log_modes(t, before, ws)
-    if not _rhs(t, False, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, True):
+    _log_modes(t, ws.clm_before, ws)
+    if not _rhs(t, False, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.Gt, True):
         return False
-    ws.K[0, :] = ws.dx
+    _copy(ws.K[0], ws.dx)
     _events(ws.x, ws.dx, ws.aux, net, ws.clm, ws.grm, ws.g_old)
     ws.istate[0] = 0
     return True
@@ -619,7 +638,7 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
     """
     nx = ws.x.shape[0]
     n_grid = out_t.shape[0]
-    y_old = np.empty(nx)
+    y_old = ws.y_old
     t = ws.fstate[0]
     if ws.istate[0] != 0:
         if not _restart(ws, net, ext):
@@ -647,14 +666,14 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
                     return ERR_SINGULAR
                 continue
             break
-        y_old[:] = ws.x
+        _copy(y_old, ws.x)
         for s in range(1, 6):
             for i in range(nx):
                 acc = 0.0
                 for q in range(s):
                     acc += _A[s, q] * ws.K[q, i]
                 ws.y_tmp[i] = y_old[i] + h * acc
-            if not _rhs(t + _C[s] * h, True, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.K[s], ws.aux_new, ws.A, ws.z, ws.piv, False):
+            if not _rhs(t + _C[s] * h, True, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.K[s], ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, False):
                 return ERR_SINGULAR
         for i in range(nx):
             acc = 0.0
@@ -662,7 +681,7 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
                 acc += _B[q] * ws.K[q, i]
             ws.y_new[i] = y_old[i] + h * acc
         t_new = t_lim if at_lim else t + h
-        if not _rhs(t_new, True, ws.y_new, net, ext, ws.clm, ws.grm, ws.K[6], ws.aux_new, ws.A, ws.z, ws.piv, False):
+        if not _rhs(t_new, True, ws.y_new, net, ext, ws.clm, ws.grm, ws.K[6], ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, False):
             return ERR_SINGULAR
         err = 0.0
         for i in range(nx):
@@ -741,7 +760,7 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
                 return ERR_SINGULAR
             continue
         stalls = 0
-        ws.x[:] = ws.y_new
+        _copy(ws.x, ws.y_new)
         t = t_new
         ws.fstate[0] = t
         fac = max(0.1, min(5.0, fac11 / ws.fstate[2] ** 0.04 / 0.9))
@@ -752,9 +771,9 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
             if not _restart(ws, net, ext):
                 return ERR_SINGULAR
         else:
-            ws.K[0, :] = ws.K[6]
-            ws.g_old[:] = ws.g_new
-            ws.aux[:] = ws.aux_new
+            _copy(ws.K[0], ws.K[6])
+            _copy(ws.g_old, ws.g_new)
+            _copy(ws.aux, ws.aux_new)
     # the last grid point, when it falls on t_stop (earlier ones start the next call)
     j = ws.istate[1]
     if j == n_grid - 1 and abs(t_out0 + j * dt_out - t_stop) <= 1e-9 * max(1.0, dt_out):

@@ -220,9 +220,13 @@ def new_workspace(net: engine.NetArrays, x0: np.ndarray, t0: float = 0.0, h0: fl
         A=np.zeros((max(nmat, 1), max(nmat, 1))),
         z=np.zeros(max(nmat, 1)),
         piv=np.zeros(max(nmat, 1), dtype=np.int64),
+        Gt=np.zeros((max(net.J.size, 1), max(nmat, 1))),
         y_new=np.zeros(nx),
         y_tmp=np.zeros(nx),
         bw=np.zeros(7),
+        y_old=np.zeros(nx),
+        clm_before=np.zeros(nc, dtype=np.int64),
+        released=np.zeros(nc + ng, dtype=np.int64),
         evlog=np.zeros((4096, 3)),
     )
 
