@@ -36,13 +36,15 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from . import actuator as act_
 from .signals import CONST, EXTERNAL, RAMP, SINE, STEP, TABLE
 
 # error_model='numpy': IEEE division semantics, no Python zero-division checks in hot loops.
 # _nrt=False: the core allocates nothing (all buffers live in the Workspace), so numba's
 # reference counting is pure overhead; it cost about 60 % of a right-hand-side evaluation.
-# fastmath: only contraction to FMA and reassociation; inf/nan semantics are kept (events use inf).
-_FAST = {"contract", "reassoc", "nsz", "arcp"}
+# fastmath: FMA contraction only; reassociation and signed-zero freedom changed the
+# actuator's flows (a pressure stuck at zero), and events rely on inf.
+_FAST = {"contract"}
 _jit = njit(cache=True, error_model="numpy", _nrt=False, fastmath=_FAST)
 _jit_inline = njit(cache=True, error_model="numpy", inline="always", _nrt=False, fastmath=_FAST)
 
@@ -78,6 +80,7 @@ class NetArrays(NamedTuple):
     sig: np.ndarray  # (nsig, ROW) compiled signals
     tab: np.ndarray  # (2, ntab) table samples
     bps: np.ndarray  # sorted breakpoint times
+    act: np.ndarray  # flat actuator record (see wetclutch.actuator), empty without one
 
 
 # ---------------------------------------------------------------- signals
@@ -198,6 +201,15 @@ def _lu_solve(A, piv, b, n):
 
 
 @_jit_inline
+def _capacity(j, t, left, x, net, ext):
+    """Torque capacity factor of clutch ``j``: its signal, or the actuator's normal force."""
+    if net.act.shape[0] > 0 and j == int(net.act[act_.CLUTCH]):
+        f_n = act_.normal_force(x[int(net.act[act_.STATE]) + 1], net.act)
+        return f_n * act_.friction_factor(f_n, net.act)
+    return signal_value(net.cl_sig[j], t, left, net.sig, net.tab, ext)
+
+
+@_jit_inline
 def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, refactor):
     """Derivatives ``dx`` and element torques ``aux`` for fixed modes; False if singular.
 
@@ -237,12 +249,18 @@ def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, refactor):
         dx[nb + j] = dw
         p_damp += net.sp_d[j] * dw * dw
         aux[2 * nc + ng + j] = tau
+    if net.act.shape[0] > 0:
+        u = signal_value(int(net.act[act_.U_SIG]), t, left, net.sig, net.tab, ext)
+        f_stem, _ = act_.evaluate(x, net.act, u, ext, dx)
+        stem = int(net.act[act_.STEM_BODY])
+        z[stem] += f_stem
+        p_src += f_stem * x[stem]
     nlock = 0
     for j in range(nc):
         a = net.cl_a[j]
         b = net.cl_b[j]
         slip = x[a] - (x[b] if b >= 0 else 0.0)
-        cap = signal_value(net.cl_sig[j], t, left, net.sig, net.tab, ext)
+        cap = _capacity(j, t, left, x, net, ext)
         aux[nc + j] = cap
         m = clm[j]
         if m == LOCKED:
@@ -252,7 +270,8 @@ def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, refactor):
             aux[j] = 0.0
             dx[e0 + j] = 0.0
         else:
-            tau = m * cap * _poly(net.cl_poly, j, abs(slip))
+            # the friction polynomial holds over the measured slip range; never negative
+            tau = m * cap * max(_poly(net.cl_poly, j, abs(slip)), 0.0)
             z[a] -= tau
             if b >= 0:
                 z[b] += tau
@@ -397,10 +416,7 @@ def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, released):
     for j in range(nc):
         a = net.cl_a[j]
         b = net.cl_b[j]
-        cap = max(
-            signal_value(net.cl_sig[j], t, False, net.sig, net.tab, ext),
-            signal_value(net.cl_sig[j], t_right, False, net.sig, net.tab, ext),
-        )
+        cap = max(_capacity(j, t, False, x, net, ext), _capacity(j, t_right, False, x, net, ext))
         slip = _slip(x, net, j)
         scale = max(1.0, abs(x[a]), abs(x[b]) if b >= 0 else 0.0)
         if cap <= 0.0:
@@ -552,7 +568,7 @@ class Workspace(NamedTuple):
     x: np.ndarray  # current state
     clm: np.ndarray  # clutch modes
     grm: np.ndarray  # gear modes (+1 forward, -1 backward, 0 stuck)
-    fstate: np.ndarray  # [t, h, previous accepted error]
+    fstate: np.ndarray  # [t, h, previous accepted error, next PWM edge, PWM period start]
     istate: np.ndarray  # [need_settle, n_out_written, n_steps, n_rejected, n_events, n_switches, n_evlog]
     K: np.ndarray  # (7, nx) stages
     dx: np.ndarray
@@ -626,6 +642,33 @@ def _restart(ws, net, ext):
 
 
 @_jit
+def _pwm_edge(t, ws, net, ext):
+    """At a PWM edge (or the start): switch the coil drive level and schedule the next edge.
+
+    The duty cycle is the actuator input, sampled at the start of each period.
+    ``fstate[3]`` is the next edge, ``fstate[4]`` the start of the current period.
+    """
+    a = net.act
+    lvl = int(a[act_.PWM_EXT])
+    period = 1.0 / a[act_.PWM_FREQ]
+    if ext[lvl] > 0.5 and t < ws.fstate[4] + period - 1e-12 * max(1.0, t):
+        ext[lvl] = 0.0  # falling edge inside the period
+        ws.fstate[3] = ws.fstate[4] + period
+        return
+    ws.fstate[4] = t
+    duty = signal_value(int(a[act_.U_SIG]), t, False, net.sig, net.tab, ext)
+    if duty <= 0.0:
+        ext[lvl] = 0.0
+        ws.fstate[3] = t + period
+    elif duty >= 1.0:
+        ext[lvl] = 1.0
+        ws.fstate[3] = t + period
+    else:
+        ext[lvl] = 1.0
+        ws.fstate[3] = t + duty * period
+
+
+@_jit
 def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_x, out_aux, out_mode):
     """Integrate from the workspace's time to ``t_stop``; write outputs on the grid.
 
@@ -640,28 +683,40 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
     n_grid = out_t.shape[0]
     y_old = ws.y_old
     t = ws.fstate[0]
+    stalls = 0
+    bp_i = np.searchsorted(net.bps, t, side="right")
+    pwm = net.act.shape[0] > 0 and net.act[act_.MODE] == act_.PWM
+    if pwm and ws.fstate[3] == -np.inf:
+        _pwm_edge(t, ws, net, ext)
+        ws.istate[0] = 1
     if ws.istate[0] != 0:
         if not _restart(ws, net, ext):
             return ERR_SINGULAR
-    stalls = 0
-    bp_i = np.searchsorted(net.bps, t, side="right")
     while t < t_stop:
         h = min(ws.fstate[1], h_max)
         t_lim = t_stop
         hit_bp = False
-        if bp_i < net.bps.shape[0] and net.bps[bp_i] <= t_stop:
+        if bp_i < net.bps.shape[0] and net.bps[bp_i] <= t_lim:
             t_lim = net.bps[bp_i]
             hit_bp = True
+        hit_pwm = False
+        if pwm and ws.fstate[3] <= t_lim:
+            hit_pwm = True
+            if ws.fstate[3] < t_lim:
+                t_lim = ws.fstate[3]
+                hit_bp = False
         if t + h >= t_lim - 1e-12 * max(1.0, abs(t_lim)):
             h = t_lim - t
             at_lim = True
         else:
             at_lim = False
         if h <= 0.0:
-            # breakpoint at the current time
-            if hit_bp:
-                bp_i += 1
-                ws.istate[0] = 1
+            # a breakpoint or PWM edge at the current time
+            if hit_bp or hit_pwm:
+                if hit_bp:
+                    bp_i += 1
+                if hit_pwm:
+                    _pwm_edge(t, ws, net, ext)
                 if not _restart(ws, net, ext):
                     return ERR_SINGULAR
                 continue
@@ -766,8 +821,11 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
         fac = max(0.1, min(5.0, fac11 / ws.fstate[2] ** 0.04 / 0.9))
         ws.fstate[2] = max(err, 1e-4)
         ws.fstate[1] = h / fac if not at_lim else max(ws.fstate[1], h)
-        if at_lim and hit_bp:
-            bp_i += 1
+        if at_lim and (hit_bp or hit_pwm):
+            if hit_bp:
+                bp_i += 1
+            if hit_pwm:
+                _pwm_edge(t, ws, net, ext)
             if not _restart(ws, net, ext):
                 return ERR_SINGULAR
         else:

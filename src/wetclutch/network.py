@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import actuator as act_mod
 from . import engine
 from .errors import SimulationError
 from .signals import Signal, as_signal, compile_signals
@@ -77,6 +78,17 @@ class _Source:
 
 
 @dataclass
+class _Actuator:
+    stem: int
+    spring: int
+    clutch: int
+    u: Signal
+    record: np.ndarray
+    pwm: bool
+    pwm_freq: float
+
+
+@dataclass
 class Network:
     """A network of rotating bodies and the elements that join them."""
 
@@ -85,6 +97,7 @@ class Network:
     gears: list[_Gear] = field(default_factory=list)
     springs: list[_Spring] = field(default_factory=list)
     sources: list[_Source] = field(default_factory=list)
+    act: _Actuator | None = None
 
     # -------------------------------------------------------------- building
     def body(self, name: str, J: float, w0: float = 0.0, drag: float = 0.0) -> int:
@@ -142,9 +155,45 @@ class Network:
         self.sources.append(_Source(name, body, as_signal(torque)))
         return len(self.sources) - 1
 
+    def actuator(
+        self,
+        stem: int,
+        spring: int,
+        clutch: int,
+        u: Signal | float,
+        record: np.ndarray,
+        pwm: bool = False,
+        pwm_freq: float = 1000.0,
+    ) -> None:
+        """Attach the hydraulic actuator (:mod:`wetclutch.actuator`).
+
+        Parameters
+        ----------
+        stem, spring
+            The valve stem body and its spring to the ground (whose deflection is the
+            stem position).
+        clutch
+            The clutch whose capacity becomes ``F_n * friction_factor(F_n)`` (N); its
+            ``mu_poly`` then holds the friction coefficient (m) versus slip.
+        u
+            Input: voltage (DC) or duty cycle (PWM).
+        record
+            Physical parameters in the layout of :mod:`wetclutch.actuator`
+            (see :func:`wetclutch.clutch.actuator_record`).
+        """
+        if self.act is not None:
+            raise ValueError("a network has at most one actuator")
+        self.act = _Actuator(stem, spring, clutch, as_signal(u), np.asarray(record, float), pwm, float(pwm_freq))
+
     # -------------------------------------------------------------- layout
     @property
     def n_state(self) -> int:
+        n = len(self.bodies) + len(self.springs) + len(self.clutches) + engine.N_ENERGY_EXTRA
+        return n + (act_mod.N_STATES if self.act is not None else 0)
+
+    @property
+    def actuator_state(self) -> int:
+        """Index of the coil current in the state vector (pressure, V_in, V_out follow)."""
         return len(self.bodies) + len(self.springs) + len(self.clutches) + engine.N_ENERGY_EXTRA
 
     def compile(self) -> tuple[engine.NetArrays, np.ndarray, np.ndarray]:
@@ -161,7 +210,22 @@ class Network:
             if c.a == GROUND:
                 raise ValueError(f"clutch {c.name!r}: flange a must be a body")
         signals: list[Signal] = [c.capacity for c in self.clutches] + [s.torque for s in self.sources]
+        if self.act is not None:
+            signals.append(self.act.u)
         sig, tab, bps, ext = compile_signals(signals)
+        act = np.zeros(0)
+        if self.act is not None:
+            a = self.act
+            act = a.record.copy()
+            act[act_mod.STATE] = self.actuator_state
+            act[act_mod.STEM_BODY] = a.stem
+            act[act_mod.STEM_SPRING] = nb + a.spring
+            act[act_mod.CLUTCH] = a.clutch
+            act[act_mod.U_SIG] = len(signals) - 1
+            act[act_mod.MODE] = act_mod.PWM if a.pwm else act_mod.DC
+            act[act_mod.PWM_EXT] = ext.size  # one more external slot: the PWM level
+            act[act_mod.PWM_FREQ] = a.pwm_freq
+            ext = np.concatenate([ext, [0.0]])
         nc = len(self.clutches)
         npoly = max([len(c.mu_poly) for c in self.clutches], default=1)
         poly = np.zeros((max(nc, 0), npoly))
@@ -190,6 +254,7 @@ class Network:
             sig=sig,
             tab=tab,
             bps=bps,
+            act=act,
         )
         x0 = np.zeros(self.n_state)
         x0[:nb] = [b.w0 for b in self.bodies]
@@ -209,7 +274,7 @@ def new_workspace(net: engine.NetArrays, x0: np.ndarray, t0: float = 0.0, h0: fl
         x=x0.astype(np.float64).copy(),
         clm=np.full(nc, engine.UNDECIDED, dtype=np.int64),
         grm=np.ones(ng, dtype=np.int64),
-        fstate=np.array([t0, h0, 1e-4]),
+        fstate=np.array([t0, h0, 1e-4, -np.inf, t0]),
         istate=np.array([1, 0, 0, 0, 0, 0, 0], dtype=np.int64),
         K=np.zeros((7, nx)),
         dx=np.zeros(nx),

@@ -81,12 +81,78 @@ class Engage(_Section):
     T_load: float = _f(10.0, "N m", "road load: brake torque on the secondary flywheel", ge=0.0, le=5e3)
 
 
+class Valve(_Section):
+    """Proportional pressure-reducing valve: electronics, coil, magnet, stem (spec section 5)."""
+
+    V_supply: float = _f(24.0, "V", "supply voltage of the valve amplifier / PWM stage", gt=0.0, le=100.0)
+    R_coil: float = _f(10.0, "ohm", "coil resistance", gt=0.0, le=1e3)
+    L_coil: float = _f(0.1, "H", "coil inductance", gt=0.0, le=10.0)
+    R_freewheel: float = _f(30.0, "ohm", "freewheel resistance when the output transistor blocks", ge=0.0, le=1e4)
+    amp_gain: float = _f(200.0, "V/A", "current-controller gain of the DC amplifier", gt=0.0, le=1e5)
+    g_current: float = _f(0.2, "A/V", "DC mode: coil current setpoint per input volt", gt=0.0, le=10.0)
+    pwm_freq: float = _f(1000.0, "Hz", "PWM frequency", gt=0.0, le=1e5)
+    k_F1: float = _f(2.84, "N/A", "magnet force, linear coefficient", ge=0.0, le=1e4)
+    k_F2: float = _f(20.1, "N/A^2", "magnet force, quadratic coefficient", ge=0.0, le=1e4)
+    F_preload: float = _f(0.39, "N", "spring preload on the stem towards opening", ge=-100.0, le=100.0)
+    A_fb: float = _f(1.96e-5, "m^2", "stem area under pressure feedback", gt=0.0, le=1e-2)
+    m_stem: float = _f(0.02, "kg", "moving mass of stem and armature", gt=0.0, le=10.0)
+    c_stem: float = _f(2200.0, "N/m", "stem spring stiffness", gt=0.0, le=1e7)
+    d_stem: float = _f(6.6, "N s/m", "stem viscous damping", ge=0.0, le=1e5)
+    F_friction: float = _f(0.5, "N", "stem/armature Coulomb friction (hysteresis)", ge=0.0, le=100.0)
+    overlap: float = _f(5e-5, "m", "land overlap around the null position", ge=0.0, le=1e-2)
+    x_port: float = _f(6.5e-4, "m", "stem travel over which a port opens fully", gt=0.0, le=1e-1)
+    port_width: float = _f(0.019, "m", "circumferential width of the metering edge", gt=0.0, le=1.0)
+    C_d: float = _f(0.65, "-", "orifice discharge coefficient", gt=0.0, le=1.0)
+
+
+class Hydraulics(_Section):
+    """Supply, line, oil volume and piston of the clutch (spec sections 3 and 4)."""
+
+    p_supply: float = _f(8e5, "Pa", "pump pressure (gauge)", gt=0.0, le=5e6)
+    line_diameter: float = _f(4e-3, "m", "supply line diameter (laminar loss)", gt=0.0, le=0.1)
+    line_length: float = _f(1.3, "m", "supply line length (laminar loss)", ge=0.0, le=100.0)
+    V0: float = _f(5e-5, "m^3", "oil volume behind the valve with the piston at its stop", gt=0.0, le=1e-2)
+    A_p: float = _f(0.0122, "m^2", "piston area", gt=0.0, le=1.0)
+    k_reset: float = _f(1.63e5, "N/m", "reset spring stiffness", gt=0.0, le=1e9)
+    p_prestress: float = _f(0.5e5, "Pa", "pressure at which the piston starts to move", ge=0.0, le=5e6)
+    x_contact: float = _f(1.5e-3, "m", "piston travel until the plates touch", gt=0.0, le=0.05)
+    leak_85C: float = _f(2.4e-12, "m^3/(s Pa)", "seal leakage conductance at 85 C (scales with 1/viscosity)", ge=0.0, le=1e-6)
+    p_relief: float = _f(8e5, "Pa", "relief valve cracking pressure", gt=0.0, le=5e6)
+    relief_conductance: float = _f(1e-9, "m^3/(s Pa)", "relief valve flow per Pa above cracking", gt=0.0, le=1e-3)
+    air_fraction: float = _f(0.005, "-", "entrained air volume fraction at atmospheric pressure", ge=0.0, lt=0.5)
+
+
+class Friction(_Section):
+    """Plate friction: T_max = mu(slip) * mu_scale * F_n * (1 - exp(-F_n / F_knee))."""
+
+    mu_slip_poly: list[float] = Field(
+        [-1.7e-6, 2.7e-4, 2.6e-2],
+        description="mu vs slip (rad/s) polynomial, highest power first (lumped: faces x radius x coefficient)",
+        json_schema_extra={"unit": "m"},
+        min_length=1,
+        max_length=8,
+    )
+    mu_scale: float = _f(1.0, "-", "multiplier on mu (unit-to-unit and condition spread)", gt=0.0, le=10.0)
+    F_knee: float = _f(150.0, "N", "normal force below which friction drops (plates barely pressed)", ge=0.0, le=1e5)
+    drag_20C: float = _f(0.013, "N m s", "open-clutch viscous drag coefficient at 20 C (scales with viscosity)", ge=0.0, le=10.0)
+
+
+class Rig(_Section):
+    """Conditions of an experiment on the virtual rig."""
+
+    oil_temp_C: float = _f(85.0, "C", "oil temperature (held constant during a run)", ge=-30.0, le=150.0)
+
+
 class Params(_Section):
     """All parameters of the rig and its scenarios, SI units."""
 
     driveline: Driveline = Field(default_factory=Driveline)
     clutch: Clutch = Field(default_factory=Clutch)
     engage: Engage = Field(default_factory=Engage)
+    valve: Valve = Field(default_factory=Valve)
+    hydraulics: Hydraulics = Field(default_factory=Hydraulics)
+    friction: Friction = Field(default_factory=Friction)
+    rig: Rig = Field(default_factory=Rig)
 
 
 def _one_line(err: ValidationError) -> str:
@@ -193,6 +259,13 @@ def describe(params: Params) -> list[tuple[str, Any, str, str]]:
     return rows
 
 
+def _literal(value: Any) -> str:
+    """A TOML literal on one line (tomli_w would spread a list over several)."""
+    if isinstance(value, list):
+        return "[" + ", ".join(_literal(v) for v in value) + "]"
+    return tomli_w.dumps({"v": value}).split("=", 1)[1].strip()
+
+
 def to_toml(params: Params) -> str:
     """A complete TOML file, one commented line per parameter, that :func:`load` reads back identically."""
     lines = ["# wetclutch parameters, SI units", ""]
@@ -204,5 +277,5 @@ def to_toml(params: Params) -> str:
                 lines.append("")
             lines.append(f"[{section}]")
             current = section
-        lines.append(f"{tomli_w.dumps({key: value}).strip()}  # [{unit}] {desc}")
+        lines.append(f"{key} = {_literal(value)}  # [{unit}] {desc}")
     return "\n".join(lines) + "\n"

@@ -1,0 +1,159 @@
+"""The clutch actuator: valve electronics and coil, magnet, hydraulics, piston (spec 3-5).
+
+The actuator adds four states to the engine's state vector: the coil current
+``I`` (A), the clutch pressure ``p`` (Pa, gauge), and the oil volumes that have
+flowed in through the valve and out (drain, leakage, relief), m^3, which close
+the oil volume balance. The valve stem is a body of
+the network (mass ``m_stem``) on a spring-damper to the ground, with a Coulomb
+brake for the stem friction; so stem stick/slip, the source of the valve's
+hysteresis, is solved exactly by the engine like any clutch. The actuator pushes
+on the stem with the magnet force minus the pressure feedback, and sets the
+normal force of the clutch.
+
+Chain of effects::
+
+    u (V or duty) -> amplifier / PWM -> coil (L, R) -> I -> F_mag(I) = k_F1 I + k_F2 I^2
+    stem: m x'' = F_mag + F_preload - A_fb p - c x - d x' - friction
+    x > overlap: supply -> clutch through the stem port in series with a laminar supply line;
+    x < -overlap: clutch -> tank;  seal leakage (laminar);  relief above p_relief
+    dp/dt = (Q_in - Q_drain - Q_leak - Q_relief) / C(p)
+    C(p) = V(p)/K_oil (+ A_p^2 / k_reset while the piston strokes)
+    F_n = A_p (p - p_contact) after the plates touch
+
+Electronics (spec 5): in DC mode a current controller with setpoint ``g_current * u``
+drives the coil; its output saturates at the supply voltage, so a large step
+rises with ``L/R``; when the controller asks for a negative voltage the output
+transistor blocks and the current decays through the freewheel circuit with
+``L/(R + R_freewheel)``. In PWM mode the coil sees the supply voltage during the
+high part of each period and freewheels through a diode during the low part, so
+the mean current is about ``duty * V_supply / R_coil``.
+
+This module holds the flat parameter layout and the compiled kernel; the engine
+calls :func:`evaluate` from its right-hand side.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .oil import _k_eff_j as effective_bulk_modulus
+
+# layout of the flat actuator record (indices into ``act``)
+(
+    STATE,  # index of I in the state vector (p, V_in, V_out follow)
+    STEM_BODY,
+    STEM_SPRING,  # state index of the stem spring deflection = stem position
+    CLUTCH,
+    U_SIG,
+    MODE,  # 0 DC, 1 PWM
+    PWM_EXT,  # ext slot holding the PWM level (0/1)
+    PWM_FREQ,
+    V_SUP,
+    R_COIL,
+    L_COIL,
+    R_FW,
+    K_AMP,
+    G_CURRENT,
+    K_F1,
+    K_F2,
+    F_PRE,
+    A_FB,
+    OVERLAP,
+    X_PORT,
+    CDW,
+    RHO,
+    P_SUP,
+    R_LINE,
+    V0,
+    A_P,
+    K_RESET,
+    P_PRE,
+    P_CONTACT,
+    X_CONTACT,
+    K_OIL,  # pure-oil bulk modulus at the oil temperature
+    AIR,  # entrained air volume fraction at atmospheric pressure
+    K_RESTRICT,  # valve-only test: downstream restriction, Q = K sqrt(p)
+    G_LEAK,
+    P_RELIEF,
+    G_RELIEF,
+    F_KNEE,
+    N_ACT,
+) = range(38)
+
+DC, PWM = 0, 1
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def piston_position(p, act):
+    """Piston travel (m) at pressure ``p``: at its stop, stroking against the reset spring, at contact."""
+    if p <= act[P_PRE]:
+        return 0.0
+    if p >= act[P_CONTACT]:
+        return act[X_CONTACT]
+    return act[A_P] * (p - act[P_PRE]) / act[K_RESET]
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def normal_force(p, act):
+    """Plate normal force (N), zero until the plates touch."""
+    return act[A_P] * (p - act[P_CONTACT]) if p > act[P_CONTACT] else 0.0
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def evaluate(x, act, u, ext, dx):
+    """Write dI/dt and dp/dt into ``dx``; return (force on the stem, clutch normal force).
+
+    ``u`` is the input (V in DC mode; ignored in PWM mode, where ``ext`` holds the level).
+    """
+    i0 = int(act[STATE])
+    cur = x[i0]
+    p = x[i0 + 1]
+    # ---- electronics and coil
+    if act[MODE] == PWM:
+        # low part of a period: the current freewheels through the diode (about 0 V)
+        v = act[V_SUP] if ext[int(act[PWM_EXT])] > 0.5 else 0.0
+    else:
+        i_ref = act[G_CURRENT] * u
+        v = act[R_COIL] * i_ref + act[K_AMP] * (i_ref - cur)
+        if v > act[V_SUP]:
+            v = act[V_SUP]
+        elif v < 0.0:
+            v = -act[R_FW] * cur  # output transistor blocks: freewheel
+    dx[i0] = (v - act[R_COIL] * cur) / act[L_COIL]
+    # ---- valve flows
+    xs = x[int(act[STEM_SPRING])]
+    o_sup = min(max(xs - act[OVERLAP], 0.0), act[X_PORT])
+    o_drn = min(max(-xs - act[OVERLAP], 0.0), act[X_PORT])
+    q_in = 0.0
+    if o_sup > 0.0:
+        # stem port (turbulent, a sqrt(dp)) in series with the laminar supply line (R_line Q)
+        a = act[CDW] * o_sup * np.sqrt(2.0 / act[RHO])
+        dp = act[P_SUP] - p
+        a2r = a * a * act[R_LINE]
+        q_in = 0.5 * (-a2r + np.sqrt(a2r * a2r + 4.0 * a * a * abs(dp)))
+        if dp < 0.0:
+            q_in = -q_in
+    q_drn = act[CDW] * o_drn * np.sqrt(2.0 * max(p, 0.0) / act[RHO])
+    q_leak = act[G_LEAK] * p + act[K_RESTRICT] * np.sqrt(max(p, 0.0))
+    q_rel = act[G_RELIEF] * (p - act[P_RELIEF]) if p > act[P_RELIEF] else 0.0
+    # ---- oil volume behind the valve and the piston's compliance
+    vol = act[V0] + act[A_P] * piston_position(p, act)
+    cap = vol / effective_bulk_modulus(max(p, 0.0), act[K_OIL], act[AIR])
+    if act[P_PRE] < p < act[P_CONTACT]:
+        cap += act[A_P] * act[A_P] / act[K_RESET]
+    dx[i0 + 1] = (q_in - q_drn - q_leak - q_rel) / cap
+    dx[i0 + 2] = q_in
+    dx[i0 + 3] = q_drn + q_leak + q_rel
+    f_mag = act[K_F1] * cur + act[K_F2] * cur * cur
+    f_stem = f_mag + act[F_PRE] - act[A_FB] * p
+    return f_stem, normal_force(p, act)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def friction_factor(f_n, act):
+    """Drop of the friction at low normal force (plates barely pressed, spec 6)."""
+    return 1.0 - np.exp(-f_n / act[F_KNEE]) if act[F_KNEE] > 0.0 else 1.0
+
+
+N_STATES = 4  # I, p, V_in, V_out
