@@ -7,10 +7,14 @@ The main entry points:
 * :class:`wetclutch.network.Network` builds any rotational network for the engine.
 """
 
-from .errors import ParameterError, SimulationError, WetclutchError
-from .params import Params
-from .params import load as load_params
-from .scenarios import SCENARIOS, Result, simulate
+from . import _jitcache
+
+_jitcache.ensure_consistent()  # before any compiled function loads from the cache
+
+from .errors import ParameterError, SimulationError, WetclutchError  # noqa: E402
+from .params import Params  # noqa: E402
+from .params import load as load_params  # noqa: E402
+from .scenarios import SCENARIOS, Result, simulate  # noqa: E402
 
 __all__ = [
     "SCENARIOS",

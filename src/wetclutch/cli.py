@@ -90,6 +90,30 @@ def _cmd_params_export(args: argparse.Namespace) -> None:
     print(f"wrote {target}")
 
 
+def _cmd_rig(args: argparse.Namespace) -> None:
+    from . import rig
+
+    p = _load_params(args)
+    res = rig.run(
+        args.experiment, p, input_mode=args.input_mode, level=args.level, from_=args.from_, oil_temp_C=args.oil_temp,
+        config=args.config, rate_hz=args.rate, seed=args.seed, noise=not args.no_noise, t_end=args.t_end,
+    )
+    rig.write(res, args.out)
+    m = res.measured
+    extra = f"; t_sync = {res.meta['t_sync']:.3f} s" if res.meta["t_sync"] is not None else ""
+    print(f"rig {args.experiment}: {len(m)} samples at {args.rate:g} Hz, {m.time.iloc[-1]:.2f} s -> {args.out}{extra}")
+
+
+def _cmd_calibration(args: argparse.Namespace) -> None:
+    from . import calibration
+
+    figs = calibration.run(_load_params(args))
+    calibration.write_report(figs, args.out)
+    for f in figs:
+        print(f"{'pass' if f.passed else 'FAIL'}  {f.name}")
+    print(f"{sum(f.passed for f in figs)} of {len(figs)} figures within tolerance -> {args.out}/report.md")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="wetclutch", description="Wet-clutch driveline model, virtual rig, identification, control.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -101,6 +125,28 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--dt-out", type=float, metavar="S", help="output interval, s (default 0.001)")
     sim.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced as a whole)")
     sim.set_defaults(func=_cmd_simulate)
+
+    from .rig import EXPERIMENTS
+
+    rg = sub.add_parser("rig", help="run an experiment on the virtual test rig and write measurement files")
+    rg.add_argument("experiment", choices=EXPERIMENTS)
+    rg.add_argument("--out", required=True, metavar="DIR")
+    rg.add_argument("--input-mode", choices=("dc", "pwm"), default="dc", help="DC voltage or PWM duty cycle input")
+    rg.add_argument("--level", type=float, metavar="X", help="input level (V or duty; default 1 V / 0.2)")
+    rg.add_argument("--from", dest="from_", type=float, metavar="X0", help="start level (default the lowest input)")
+    rg.add_argument("--oil-temp", type=float, metavar="C", help="oil temperature, C (default rig.oil_temp_C)")
+    rg.add_argument("--config", choices=("clutch", "valve-only"), default="clutch")
+    rg.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sampling rate (default 1000)")
+    rg.add_argument("--seed", type=int, default=0, metavar="N", help="noise seed")
+    rg.add_argument("--no-noise", action="store_true", help="ideal sensors: no noise, filters or quantisation")
+    rg.add_argument("--t-end", type=float, metavar="S", help="duration, s (default: the experiment's)")
+    _param_args(rg)
+    rg.set_defaults(func=_cmd_rig)
+
+    cal = sub.add_parser("calibration-report", help="compare the default rig with the study's figures")
+    cal.add_argument("--out", required=True, metavar="DIR")
+    _param_args(cal)
+    cal.set_defaults(func=_cmd_calibration)
 
     par = sub.add_parser("params", help="show or export the parameter record")
     psub = par.add_subparsers(dest="params_command", required=True, parser_class=_Parser)

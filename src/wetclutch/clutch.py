@@ -9,7 +9,9 @@ Two configurations, as in the study:
 ``valve-only``
     The study's valve test: the clutch is replaced by a downstream restriction
     passing ``VALVE_TEST_FLOW`` at the supply pressure (continuous flow instead of a
-    dead-end volume); there is no driveline.
+    dead-end volume); there is no driveline. The valve sits on the test bench's
+    pump directly: the clutch's feed line (``hydraulics.line_*``), which could not
+    pass 32 l/min at 8 bar, is not part of this test.
 
 The oil temperature is a parameter of the experiment (``rig.oil_temp_C``); the
 oil's viscosity (supply line loss, leakage, open-clutch drag), density and bulk
@@ -50,8 +52,9 @@ def actuator_record(params: Params, temp_C: float, config: str = "clutch") -> np
     r[A.OVERLAP], r[A.X_PORT], r[A.CDW] = v.overlap, v.x_port, v.C_d * v.port_width
     r[A.RHO] = oil.density(temp_C)
     r[A.P_SUP] = h.p_supply
-    # Hagen-Poiseuille: laminar loss of the supply line, proportional to viscosity
-    r[A.R_LINE] = 128.0 * mu * h.line_length / (np.pi * h.line_diameter**4)
+    # Hagen-Poiseuille: laminar loss of the clutch's feed line, proportional to viscosity
+    line = h.line_length if config == "clutch" else 0.0
+    r[A.R_LINE] = 128.0 * mu * line / (np.pi * h.line_diameter**4)
     r[A.V0] = h.V0
     r[A.K_OIL], r[A.AIR] = oil.bulk_modulus(temp_C, air_fraction=0.0), h.air_fraction
     r[A.G_LEAK] = h.leak_85C * oil.dynamic_viscosity(85.0) / mu

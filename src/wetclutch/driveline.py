@@ -82,7 +82,7 @@ def summary(tr: Trajectory) -> dict:
     e = tr.energies()
     T_r = tr.spring_torque("axle")
     return {
-        "t_sync": tr.first_lock("clutch"),
+        "t_sync": tr.sync_time("clutch"),
         "T_r_peak": float(np.max(np.abs(T_r))),
         "E_clutch": float(e["dissipated_clutch"][-1]),
         "E_brake": float(e["dissipated_brake"][-1]),

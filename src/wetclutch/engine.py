@@ -426,10 +426,14 @@ def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, released):
         else:
             clm[j] = 1 if slip > 0.0 else -1
     ns = net.sp_k.shape[0]
+    # "at standstill" relative to the speeds in the network (rad/s scale of the run)
+    w_scale = 1.0
+    for k in range(net.J.shape[0]):
+        w_scale = max(w_scale, abs(x[k]))
     for k in range(ng):
         i_in = net.gr_in[k]
         o = net.gr_out[k]
-        if abs(x[o]) <= 1e-8 * max(1.0, abs(x[o])) and abs(x[i_in]) <= 1e-8:
+        if abs(x[o]) <= 1e-8 * w_scale and abs(x[i_in]) <= 1e-8 * w_scale:
             grm[k] = STUCK
         elif abs(grm[k]) == STUCK:
             grm[k] = 1
@@ -569,7 +573,7 @@ class Workspace(NamedTuple):
     clm: np.ndarray  # clutch modes
     grm: np.ndarray  # gear modes (+1 forward, -1 backward, 0 stuck)
     fstate: np.ndarray  # [t, h, previous accepted error, next PWM edge, PWM period start]
-    istate: np.ndarray  # [need_settle, n_out_written, n_steps, n_rejected, n_events, n_switches, n_evlog]
+    istate: np.ndarray  # [need_settle, n_out, n_steps, n_rejected, n_events, n_switches, n_evlog, last event fn]
     K: np.ndarray  # (7, nx) stages
     dx: np.ndarray
     aux: np.ndarray
@@ -757,6 +761,7 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
         _events(ws.y_new, ws.K[6], ws.aux_new, net, ws.clm, ws.grm, ws.g_new)
         # earliest event in (t, t_new]: bracket [ta, tb] with g(ta) >= 0 > g(tb)
         t_ev = np.inf
+        e_ev = -1
         ng_ev = ws.g_old.shape[0]
         for e in range(ng_ev):
             if ws.g_old[e] >= 0.0 and ws.g_new[e] < 0.0:
@@ -792,6 +797,7 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
                             ga *= 0.5
                         side = 1
                 t_ev = tb
+                e_ev = e
         # emit grid points in [t, end of this step)
         t_seg = t_new if t_ev == np.inf else t_ev
         j = ws.istate[1]
@@ -811,6 +817,7 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
             t = t_ev
             ws.fstate[0] = t
             ws.istate[4] += 1
+            ws.istate[7] = e_ev
             if not _restart(ws, net, ext):
                 return ERR_SINGULAR
             continue

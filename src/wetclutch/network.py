@@ -275,7 +275,7 @@ def new_workspace(net: engine.NetArrays, x0: np.ndarray, t0: float = 0.0, h0: fl
         clm=np.full(nc, engine.UNDECIDED, dtype=np.int64),
         grm=np.ones(ng, dtype=np.int64),
         fstate=np.array([t0, h0, 1e-4, -np.inf, t0]),
-        istate=np.array([1, 0, 0, 0, 0, 0, 0], dtype=np.int64),
+        istate=np.array([1, 0, 0, 0, 0, 0, 0, -1], dtype=np.int64),
         K=np.zeros((7, nx)),
         dx=np.zeros(nx),
         aux=np.zeros(max(naux, 1)),
@@ -352,6 +352,18 @@ class Trajectory:
         hit = ev[(ev[:, 1] == j) & (ev[:, 2] == engine.LOCKED) & (ev[:, 0] > self.t[0])]
         return float(hit[0, 0]) if hit.size else None
 
+    def sync_time(self, clutch: str) -> float | None:
+        """Time the clutch locks for good (stays locked to the end of the run), or None.
+
+        A hard engagement can stick and break loose several times before the two sides
+        synchronise; this is the last lock."""
+        j = self._idx(self.network.clutches, clutch)
+        if self.modes.size == 0 or self.modes[-1, j] != engine.LOCKED:
+            return None
+        ev = self.events[(self.events[:, 1] == j) & (self.events[:, 0] > self.t[0])]
+        locks = ev[ev[:, 2] == engine.LOCKED]
+        return float(locks[-1, 0]) if locks.size else None
+
     # -------------------------------------------------------------- energy
     def energies(self) -> dict[str, np.ndarray]:
         """Energy terms over time, J: stored (kinetic, spring), dissipated, supplied."""
@@ -389,6 +401,16 @@ _STATUS = {
 }
 
 
+def _event_source(network: Network, e: int) -> str:
+    """Which element an event function belongs to (for error messages)."""
+    nc = len(network.clutches)
+    if 0 <= e < 2 * nc:
+        return f"clutch {network.clutches[e // 2].name!r}"
+    if e >= 2 * nc:
+        return f"gear {network.gears[(e - 2 * nc) // 2].name!r}"
+    return "unknown element"
+
+
 def integrate(
     network: Network,
     t_end: float,
@@ -419,7 +441,10 @@ def integrate(
     out_mode = np.zeros((n, len(network.clutches)), dtype=np.int64)
     status = engine.advance(net, ext, ws, float(t_end), float(dt_out), 0.0, rtol, atol, h_max, out_t, out_x, out_aux, out_mode)
     if status != engine.OK:
-        raise SimulationError(_STATUS.get(status, f"integration failed (status {status})"))
+        msg = _STATUS.get(status, f"integration failed (status {status})")
+        if status == engine.ERR_ZENO:
+            msg += f" (at t = {ws.fstate[0]:.6g} s, {_event_source(network, int(ws.istate[7]))})"
+        raise SimulationError(msg)
     n_ev = min(int(ws.istate[6]), ws.evlog.shape[0])
     m = int(ws.istate[1])
     return Trajectory(

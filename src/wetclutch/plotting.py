@@ -45,3 +45,25 @@ def plot_signals(df: pd.DataFrame, scenario: str, path: Path, title: str | None 
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def plot_rig(measured: pd.DataFrame, truth: pd.DataFrame, path: Path, title: str) -> None:
+    """A rig run: command, pressure, torque and speeds; measured (dots) over true (lines)."""
+    panels = [("Command u", ["u"]), ("Clutch pressure [bar]", ["p_clutch"]), ("Torque T_r [N m]", ["T_r"]),
+              ("Speeds [rad/s]", ["omega_p", "omega_1", "omega_s"])]
+    panels = [(n, [c for c in cols if c in measured.columns]) for n, cols in panels]
+    panels = [pc for pc in panels if pc[1]]
+    fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.2 * len(panels) + 0.6), sharex=True, squeeze=False)
+    for ax, (name, cols) in zip(axes[:, 0], panels):
+        scale = 1e-5 if "bar" in name else 1.0
+        for c in cols:
+            ax.plot(measured["time"], measured[c] * scale, ".", ms=1.5, alpha=0.5, label=f"{c} measured")
+            ax.plot(truth["time"], truth[c] * scale, lw=1.0, label=f"{c} true")
+        ax.set_title(name, fontsize=10, loc="left")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize=7, ncol=2)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -1,0 +1,101 @@
+"""Actuator physics on the virtual rig: fill phases, static gain, oil volume balance, PWM, relief, temperature."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+import wetclutch as wc
+from wetclutch import actuator as A
+from wetclutch import calibration, clutch, oil, rig
+from wetclutch.network import integrate
+from wetclutch.signals import Step
+
+
+@pytest.fixture(scope="module")
+def pwm_step():
+    return rig.run("step", input_mode="pwm", level=0.2, noise=False, t_end=3.0)
+
+
+def test_fill_phases_in_order(pwm_step):
+    t = pwm_step.truth
+    h = wc.Params().hydraulics
+    moving = t.time[t.x_piston > 0].iloc[0]
+    contact = t.time[t.x_piston >= h.x_contact * (1 - 1e-9)].iloc[0]
+    torque = t.time[t.T_c.abs() > 0.2].iloc[0]
+    assert 1.0 < moving < contact <= torque
+    # the piston starts at the prestress and the plates touch at 0.7 bar (the study's figure)
+    assert t.p_clutch[t.time == moving].iloc[0] == pytest.approx(h.p_prestress, rel=0.05)
+    # (the last sample before contact: after it the small oil volume lets the pressure jump)
+    assert t.p_clutch[t.time < contact].iloc[-1] / 1e5 == pytest.approx(0.7, abs=0.02)
+    # stroke: the pressure creeps (a plateau) while the piston moves, far slower than before and after
+    stroke = t[(t.time > moving) & (t.time < contact)]
+    assert np.ptp(stroke.p_clutch) < 0.3e5 and (contact - moving) > 0.02
+
+
+def test_static_gain_is_monotone_in_the_input():
+    p = wc.Params()
+    v = [0.5, 1.0, 1.5, 2.0, 3.0, 4.0]
+    stat = [calibration._settled(p, Step(1.0, 0.2, x), False, "clutch", 85.0, 4.0) for x in v]
+    assert np.all(np.diff(stat) > 0)
+
+
+def test_oil_volume_is_conserved(pwm_step):
+    """Flow in - flow out (drain, leakage, relief) = piston displacement + compression of the oil."""
+    t = pwm_step.truth
+    rec = clutch.actuator_record(wc.Params(), 85.0)
+
+    def volume(p):
+        return rec[A.V0] + rec[A.A_P] * t_piston(p)
+
+    def t_piston(p):
+        if p <= rec[A.P_PRE]:
+            return 0.0
+        if p >= rec[A.P_CONTACT]:
+            return rec[A.X_CONTACT]
+        return rec[A.A_P] * (p - rec[A.P_PRE]) / rec[A.K_RESET]
+
+    def compliance(p):
+        return volume(p) / oil.bulk_modulus(85.0, max(p, 0.0), air_fraction=rec[A.AIR])
+
+    p0, p1 = t.p_clutch.iloc[0], t.p_clutch.iloc[-1]
+    pts = sorted({p0, p1, rec[A.P_PRE], rec[A.P_CONTACT]})
+    compression = sum(quad(compliance, a, b, limit=200)[0] for a, b in zip(pts[:-1], pts[1:]))
+    stored = volume(p1) - volume(p0) + compression * np.sign(p1 - p0)
+    net_in = (t.V_in.iloc[-1] - t.V_in.iloc[0]) - (t.V_out.iloc[-1] - t.V_out.iloc[0])
+    assert net_in == pytest.approx(stored, rel=1e-4)
+
+
+def test_pwm_ripple_is_small_at_the_default_frequency(pwm_step):
+    t = pwm_step.truth
+    settled = t.p_clutch[t.time > 2.5]
+    assert np.std(settled) < 0.01e5  # well below the 0.2 bar sensor threshold
+
+
+def test_relief_holds_8_bar():
+    res = rig.run("step", level=5.0, noise=False, t_end=3.0)
+    assert res.truth.p_clutch.max() <= wc.Params().hydraulics.p_relief * 1.01
+
+
+def test_colder_oil_fills_slower():
+    p = wc.Params()
+    cold, _ = calibration.onset(p, 0.2, 20.0)
+    warm, _ = calibration.onset(p, 0.2, 85.0)
+    assert cold > 1.5 * warm
+
+
+def test_study_figures_that_the_default_meets():
+    """The study's dead times, contact pressure and DC static curve (spec section 6)."""
+    figs = {f.name: f for f in calibration.run()}
+    for name, f in figs.items():
+        if name.startswith(("dead time", "contact pressure", "whole clutch static p vs DC")):
+            assert f.passed, (name, f.simulated, f.error)
+
+
+def test_pwm_duty_sets_the_mean_coil_current():
+    rn = clutch.build(wc.Params(), Step(1.0, 0.0, 0.1), pwm=True)
+    tr = integrate(rn.network, 2.0, dt_out=1e-4)
+    v = wc.Params().valve
+    mean_i = np.mean(tr.x[tr.t > 1.5, rn.i_current])
+    assert mean_i == pytest.approx(0.1 * v.V_supply / v.R_coil, rel=0.02)

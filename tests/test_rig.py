@@ -1,0 +1,92 @@
+"""The virtual rig: experiments, files like a real rig, bad options."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from wetclutch import measurement, rig
+
+
+@pytest.fixture(scope="module")
+def step_run(tmp_path_factory):
+    res = rig.run("step", level=2.0, seed=3, t_end=4.0)
+    out = tmp_path_factory.mktemp("rig") / "step"
+    rig.write(res, out)
+    return res, out
+
+
+def test_rig_writes_every_file(step_run):
+    _, out = step_run
+    for f in ("measured.csv", "measured.mf4", "measured.mat", "truth.csv", "meta.json", "plot.png"):
+        assert (out / f).stat().st_size > 0, f
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["experiment"] == "step" and meta["settings"]["level"] == 2.0
+    assert meta["params"]["driveline"]["ratio"] == 0.5
+
+
+@pytest.mark.parametrize("name", ["measured.csv", "measured.mf4", "measured.mat"])
+def test_measurement_files_load_back_with_the_same_values(step_run, name):
+    res, out = step_run
+    df, units = measurement.read_measurement(out / name)
+    cols = ["time", "u", "p_clutch", "T_r", "omega_p", "omega_1", "omega_r", "omega_s", "oil_temp"]
+    assert list(df.columns) == cols
+    for c in cols:
+        np.testing.assert_allclose(df[c], res.measured[c], rtol=1e-8, atol=1e-12)
+    if name != "measured.csv":
+        assert units["p_clutch"] == "Pa"
+
+
+def test_measured_is_noisy_truth_at_the_rate(step_run):
+    res, _ = step_run
+    m, t = res.measured, res.truth
+    assert np.allclose(np.diff(m.time), 1e-3)
+    p_true = np.interp(m.time, t.time, t.p_clutch)
+    resid = m.p_clutch - p_true
+    assert 500 < np.std(resid[m.time < 0.9]) < 5000  # sensor noise, Pa
+
+
+@pytest.mark.parametrize("experiment", ["relaxation", "staircase", "noise", "multisine", "chirp"])
+def test_every_experiment_runs(experiment):
+    res = rig.run(experiment, config="valve-only", input_mode="pwm", level=0.3, from_=0.05, t_end=4.0, noise=False)
+    u = res.truth.u
+    assert u.min() >= 0.0 and u.max() <= 1.0 and np.ptp(u) > 0.05
+    assert np.all(np.isfinite(res.truth.p_clutch))
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (["step", "--level", "7"], "outside the rig's input range"),
+        (["step", "--input-mode", "pwm", "--level", "1.5"], "outside the rig's input range"),
+        (["step", "--oil-temp", "300"], "--oil-temp"),
+        (["step", "--config", "gearbox"], "invalid choice"),
+        (["warp"], "invalid choice"),
+        (["step", "--rate", "0"], "--rate"),
+        (["step", "--set", "valve.R_coil=-1"], "valve.R_coil"),
+    ],
+)
+def test_bad_rig_options(tmp_path, args, fragment):
+    out = tmp_path / "never"
+    r = subprocess.run([sys.executable, "-m", "wetclutch.cli", "rig", *args, "--out", str(out)],
+                       capture_output=True, text=True)
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and fragment in lines[0], r.stderr
+    assert not out.exists()
+
+
+def test_calibration_report_cli(tmp_path):
+    out = tmp_path / "cal"
+    r = subprocess.run([sys.executable, "-m", "wetclutch.cli", "calibration-report", "--out", str(out)],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["total"] >= 8 and all("published" in f and "simulated" in f for f in rep["figures"])
+    text = (out / "report.md").read_text()
+    assert "| figure | published | simulated |" in text
+    assert (out / "curves.png").exists() and (out / "dead_times.png").exists()
