@@ -549,6 +549,54 @@ _P = np.array(
 )
 
 
+# the tableau as scalars: numba folds them into the code, and each stage becomes one
+# straight vectorisable loop instead of a loop over stages inside a loop over states
+(_A10,) = _A[1, :1]
+_A20, _A21 = _A[2, :2]
+_A30, _A31, _A32 = _A[3, :3]
+_A40, _A41, _A42, _A43 = _A[4, :4]
+_A50, _A51, _A52, _A53, _A54 = _A[5, :5]
+_B0, _B1, _B2, _B3, _B4, _B5 = _B
+_E0, _E1, _E2, _E3, _E4, _E5, _E6 = _E
+
+
+@_jit_inline
+def _stage(y0, K, h, s, out):
+    """State at stage ``s`` (1..5) of a Dormand-Prince step; ``s == 6`` is the 5th-order solution."""
+    n = y0.shape[0]
+    if s == 1:
+        for i in range(n):
+            out[i] = y0[i] + h * (_A10 * K[0, i])
+    elif s == 2:
+        for i in range(n):
+            out[i] = y0[i] + h * (_A20 * K[0, i] + _A21 * K[1, i])
+    elif s == 3:
+        for i in range(n):
+            out[i] = y0[i] + h * (_A30 * K[0, i] + _A31 * K[1, i] + _A32 * K[2, i])
+    elif s == 4:
+        for i in range(n):
+            out[i] = y0[i] + h * (_A40 * K[0, i] + _A41 * K[1, i] + _A42 * K[2, i] + _A43 * K[3, i])
+    elif s == 5:
+        for i in range(n):
+            out[i] = y0[i] + h * (_A50 * K[0, i] + _A51 * K[1, i] + _A52 * K[2, i] + _A53 * K[3, i] + _A54 * K[4, i])
+    else:
+        for i in range(n):
+            out[i] = y0[i] + h * (_B0 * K[0, i] + _B2 * K[2, i] + _B3 * K[3, i] + _B4 * K[4, i] + _B5 * K[5, i])
+
+
+@_jit_inline
+def _error_norm(y0, y1, K, h, rtol, atol):
+    """RMS of the embedded error estimate scaled by ``atol + rtol |y|``."""
+    n = y0.shape[0]
+    acc = 0.0
+    for i in range(n):
+        e = _E0 * K[0, i] + _E2 * K[2, i] + _E3 * K[3, i] + _E4 * K[4, i] + _E5 * K[5, i] + _E6 * K[6, i]
+        sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
+        r = h * e / sc
+        acc += r * r
+    return np.sqrt(acc / n)
+
+
 @_jit_inline
 def _dense(y0, K, h, theta, out, bw):
     nx = y0.shape[0]
@@ -727,30 +775,14 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
             break
         _copy(y_old, ws.x)
         for s in range(1, 6):
-            for i in range(nx):
-                acc = 0.0
-                for q in range(s):
-                    acc += _A[s, q] * ws.K[q, i]
-                ws.y_tmp[i] = y_old[i] + h * acc
+            _stage(y_old, ws.K, h, s, ws.y_tmp)
             if not _rhs(t + _C[s] * h, True, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.K[s], ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, False):
                 return ERR_SINGULAR
-        for i in range(nx):
-            acc = 0.0
-            for q in range(6):
-                acc += _B[q] * ws.K[q, i]
-            ws.y_new[i] = y_old[i] + h * acc
+        _stage(y_old, ws.K, h, 6, ws.y_new)
         t_new = t_lim if at_lim else t + h
         if not _rhs(t_new, True, ws.y_new, net, ext, ws.clm, ws.grm, ws.K[6], ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, False):
             return ERR_SINGULAR
-        err = 0.0
-        for i in range(nx):
-            acc = 0.0
-            for q in range(7):
-                acc += _E[q] * ws.K[q, i]
-            sc = atol + rtol * max(abs(y_old[i]), abs(ws.y_new[i]))
-            e = h * acc / sc
-            err += e * e
-        err = np.sqrt(err / nx)
+        err = _error_norm(y_old, ws.y_new, ws.K, h, rtol, atol)
         # PI step control (Hairer's DOPRI5): steadier near the stability limit
         fac11 = (err + 1e-30) ** 0.17
         if err > 1.0:

@@ -1,0 +1,57 @@
+"""Speed of a 5 s clutch step with the full actuator and driveline against a stiff scipy baseline.
+
+Prints the wall time per run (median, after JIT warm-up) of the engine on the
+``clutch`` configuration (DC step 0.2 -> 1 V at 1 s, 85 C, output every 1 ms) and of
+``benchmarks/scipy_actuator.py`` (solve_ivp, stiff method) on the same equations, the
+speed ratio, and their agreement (pressure samples, time of torque onset).
+Targets (issue 3): engine < 20 ms and >= 100x faster than the baseline.
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import wetclutch as wc  # noqa: E402
+from scipy_actuator import actuator_step_scipy  # noqa: E402
+from wetclutch import clutch  # noqa: E402
+from wetclutch.network import integrate  # noqa: E402
+from wetclutch.signals import Step  # noqa: E402
+
+
+def median_time(fn, repeats):
+    out = fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def main() -> None:
+    rn = clutch.build(wc.Params(), Step(1.0, 0.2, 1.0), temp_C=85.0)
+    t_eng, tr = median_time(lambda: integrate(rn.network, 5.0, dt_out=1e-3), 20)
+    t_sp, sp = median_time(lambda: actuator_step_scipy(5.0), 3)
+    p_eng = tr.x[:, rn.i_pressure]
+    onset = tr.t[np.argmax(np.abs(tr.clutch_torque("clutch")) > 0.2)]
+    print(f"machine: {os.cpu_count()} cores")
+    print(f"engine  clutch step 5 s (actuator + driveline)  {t_eng * 1e3:8.2f} ms/run   (target < 20 ms)  {tr.stats}")
+    print(f"scipy   solve_ivp stiff, same equations         {t_sp * 1e3:8.1f} ms/run")
+    print(f"speed ratio                                     {t_sp / t_eng:8.0f} x      (target >= 100 x)")
+    for ts in (1.2, 1.5, 3.0, 5.0):
+        pe = np.interp(ts, tr.t, p_eng)
+        ps = np.interp(ts, sp["t"], sp["p_clutch"])
+        print(f"p_clutch at {ts:3.1f} s: engine {pe / 1e5:8.4f} bar, scipy {ps / 1e5:8.4f} bar")
+    print(f"torque onset: engine {onset:.4f} s, scipy {sp['onset_time']:.4f} s")
+
+
+if __name__ == "__main__":
+    main()
