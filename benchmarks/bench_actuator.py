@@ -10,14 +10,14 @@ Targets (issue 3): engine < 20 ms and >= 100x faster than the baseline.
 from __future__ import annotations
 
 import os
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _timing import median_time  # noqa: E402
 
 import wetclutch as wc  # noqa: E402
 from scipy_actuator import actuator_step_scipy  # noqa: E402
@@ -26,14 +26,6 @@ from wetclutch.network import integrate  # noqa: E402
 from wetclutch.signals import Step  # noqa: E402
 
 
-def median_time(fn, repeats):
-    out = fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
 
 
 def main() -> None:

@@ -19,12 +19,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import sys
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _timing import median_time  # noqa: E402
 
 import wetclutch as wc  # noqa: E402
 from scipy_engage import engage_scipy  # noqa: E402
@@ -32,14 +32,6 @@ from wetclutch.network import integrate  # noqa: E402
 from wetclutch.scenarios import SCENARIOS  # noqa: E402
 
 
-def median_time(fn, repeats: int) -> tuple[float, object]:
-    out = fn()  # warm-up (JIT, caches)
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
 
 
 def scipy_params(p: wc.Params) -> dict:

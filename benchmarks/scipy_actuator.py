@@ -32,10 +32,9 @@ with engine rtol 1e-11 and LSODA rtol 1e-9 the traces agree within 0.2 Pa everyw
 """
 
 import math
-import statistics
-import time
 
 import numpy as np
+from _timing import median_time
 from scipy.integrate import solve_ivp
 
 import wetclutch as wc
@@ -259,19 +258,9 @@ def _engine_run(t_end, dt_out):
     return rn, integrate(rn.network, t_end, dt_out=dt_out)
 
 
-def _timed(fun, repeats=3):
-    """Median wall time of ``fun()`` over ``repeats`` calls, and its last result."""
-    walls = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        out = fun()
-        walls.append(time.perf_counter() - start)
-    return statistics.median(walls), out
-
-
 if __name__ == "__main__":
     _engine_run(5.0, DT_OUT)  # JIT warm-up
-    wall_e, (rn, tr) = _timed(lambda: _engine_run(5.0, DT_OUT))
+    wall_e, (rn, tr) = median_time(lambda: _engine_run(5.0, DT_OUT), 3)
     p_eng = tr.x[:, rn.i_pressure]
     T_c = np.abs(_engine_run(1.5, 1e-5)[1].clutch_torque("clutch"))  # onset: interpolated on a 10 us grid
     n = np.argmax(T_c > ONSET)
@@ -279,7 +268,7 @@ if __name__ == "__main__":
     ev_e = {name: tr.events[tr.events[:, 1] == j, 0] for j, name in enumerate(("contact", "brake", "stem"))}
     print(f"engine (rtol 1e-8): {wall_e * 1e3:.1f} ms/run (median of 3), {tr.stats['events']} events")
     for method in ("BDF", "LSODA"):
-        wall, res = _timed(lambda method=method: actuator_step_scipy(method=method))
+        wall, res = median_time(lambda method=method: actuator_step_scipy(method=method), 3)
         ev_s = {name: np.array([t for t, nm in res["log"] if nm.startswith(name)]) for name in ev_e}
         print(f"\nsolve_ivp {method} rtol 1e-6: {wall * 1e3:.0f} ms/run (median of 3, {wall / wall_e:.0f}x engine),"
               f" {res['nfev']} rhs calls, {res['n_events']} events\n    t [s]  p engine [Pa]  p scipy [Pa]  diff [Pa]")
