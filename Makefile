@@ -23,6 +23,7 @@ test: $(STAMP)
 ## bench: speed benchmarks (not part of the tests)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_engine.py
+	$(BIN)/python benchmarks/bench_actuator.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache
