@@ -60,19 +60,11 @@ def test_engage_energy_balance_closes(engage_default):
             assert np.all(np.diff(v) >= -1e-9 * stored[0]), k
 
 
-def _dominant_frequency(t, y):
-    """Frequency from the mean spacing of upward zero crossings (linear interpolation)."""
-    y = y - np.mean(y)
-    idx = np.where((y[:-1] < 0) & (y[1:] >= 0))[0]
-    tc = t[idx] - y[idx] * (t[idx + 1] - t[idx]) / (y[idx + 1] - y[idx])
-    return (len(tc) - 1) / (tc[-1] - tc[0])
-
-
 def test_post_sync_oscillation_at_2_1_hz(engage_default):
     s = engage_default.signals
     t_sync = engage_default.summary["t_sync"]
     after = s[s.time > t_sync + 0.2]
-    f = _dominant_frequency(after.time.to_numpy(), after.T_r.to_numpy())
+    f = driveline.ring_frequency(after.time.to_numpy(), after.T_r.to_numpy())
     assert f == pytest.approx(2.1, rel=0.03)
     # an FFT of the same window agrees
     y = after.T_r.to_numpy() - after.T_r.mean()

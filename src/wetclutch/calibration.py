@@ -23,7 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from . import clutch
+from . import clutch, driveline
+from .scenarios import simulate
 from .network import integrate
 from .params import Params
 from .signals import Step, Table
@@ -118,6 +119,10 @@ def run(params: Params | None = None) -> list[Figure]:
     figs.append(Figure("whole clutch static p vs oil temperature at pdc 0.2 (20..85 C)", pub.round(3).tolist(),
                        sim.round(3).tolist(), float(err[np.argmax(np.abs(err))]), 0.1, unit="bar",
                        curve={"T": temps.tolist(), "published": pub.tolist(), "simulated": sim.tolist()}))
+    eng = simulate("engage", p)
+    after = eng.signals[eng.signals.time > (eng.summary["t_sync"] or 0.0) + 0.2]
+    f_ring = driveline.ring_frequency(after.time.to_numpy(), after.T_r.to_numpy())
+    figs.append(Figure("driveline resonance after synchronisation", 2.1, f_ring, f_ring / 2.1 - 1.0, 0.03, unit="Hz"))
     return figs
 
 

@@ -95,3 +95,16 @@ def summary(tr: Trajectory) -> dict:
         "steps": tr.stats["steps"],
         "events": tr.stats["events"],
     }
+
+
+def ring_frequency(t: np.ndarray, y: np.ndarray) -> float:
+    """Frequency (Hz) of an oscillation from the mean spacing of its upward crossings of its mean.
+
+    Used on ``T_r`` after synchronisation, where the driveline rings freely (spec section 1).
+    """
+    y = y - np.mean(y)
+    i = np.flatnonzero((y[:-1] < 0) & (y[1:] >= 0))
+    if i.size < 2:
+        return float("nan")
+    tc = t[i] - y[i] * (t[i + 1] - t[i]) / (y[i + 1] - y[i])
+    return float((tc.size - 1) / (tc[-1] - tc[0]))
