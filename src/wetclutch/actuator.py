@@ -73,7 +73,7 @@ from .oil import _k_eff_j as effective_bulk_modulus
     X_CONTACT,
     K_OIL,  # pure-oil bulk modulus at the oil temperature
     AIR,  # entrained air volume fraction at atmospheric pressure
-    K_RESTRICT,  # valve-only test: downstream restriction, Q = K sqrt(p)
+    K_RESTRICT,  # turbulent outflow Q = K sqrt(p): seal rings, or the valve test's restriction
     G_LEAK,
     P_RELIEF,
     G_RELIEF,

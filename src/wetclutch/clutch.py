@@ -63,6 +63,7 @@ def actuator_record(params: Params, temp_C: float, config: str = "clutch") -> np
     if config == "clutch":
         r[A.A_P], r[A.K_RESET], r[A.X_CONTACT] = h.A_p, h.k_reset, h.x_contact
         r[A.P_PRE], r[A.P_CONTACT] = h.p_prestress, p_contact(params)
+        r[A.K_RESTRICT] = h.leak_orifice
     else:
         # no piston: the volume is the hose to the restriction
         r[A.A_P], r[A.K_RESET], r[A.X_CONTACT] = 0.0, 1.0, 0.0

@@ -117,6 +117,7 @@ class Hydraulics(_Section):
     p_prestress: float = _f(0.5e5, "Pa", "pressure at which the piston starts to move", ge=0.0, le=5e6)
     x_contact: float = _f(1.5e-3, "m", "piston travel until the plates touch", gt=0.0, le=0.05)
     leak_85C: float = _f(2.4e-12, "m^3/(s Pa)", "seal leakage conductance at 85 C (scales with 1/viscosity)", ge=0.0, le=1e-6)
+    leak_orifice: float = _f(0.0, "m^3/(s Pa^0.5)", "turbulent leakage of the rotating seal rings, Q = K sqrt(p)", ge=0.0, le=1e-4)
     p_relief: float = _f(8e5, "Pa", "relief valve cracking pressure", gt=0.0, le=5e6)
     relief_conductance: float = _f(1e-9, "m^3/(s Pa)", "relief valve flow per Pa above cracking", gt=0.0, le=1e-3)
     air_fraction: float = _f(0.005, "-", "entrained air volume fraction at atmospheric pressure", ge=0.0, lt=0.5)
