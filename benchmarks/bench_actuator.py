@@ -42,7 +42,7 @@ def main() -> None:
         pe = np.interp(ts, tr.t, p_eng)
         ps = np.interp(ts, sp["t"], sp["p_clutch"])
         print(f"p_clutch at {ts:3.1f} s: engine {pe / 1e5:8.4f} bar, scipy {ps / 1e5:8.4f} bar")
-    print(f"torque onset: engine {onset:.4f} s, scipy {sp['onset_time']:.4f} s")
+    print(f"torque onset: engine {onset:.4f} s (first 1 ms sample), scipy {sp['onset_time']:.4f} s (event)")
 
 
 if __name__ == "__main__":

@@ -16,7 +16,7 @@ secondary speed, valve stem position and speed, coil current, clutch pressure (S
   friction by exact stick/slip (events: ``v = 0``, holding force beyond ``F_friction``).
 * Hydraulics: supply port in series with the laminar line, drain port, leakage, relief;
   aerated-oil compliance plus the piston stroking against its reset spring.
-* Driveline: clutch torque ``F_n (1 - exp(-F_n/F_knee)) mu(|slip|) sign(slip)`` with
+* Driveline: clutch torque ``F_n F_n / (F_n + F_knee) mu(|slip|) sign(slip)`` with
   ``F_n = A_p (p - p_contact)``, oil drag ``b (w_p - w_1)``, CVT ``w_r = i w_1`` (massless
   output) losing ``eta`` against the power flow and held at standstill while the torques
   stay in the efficiency band, axle spring-damper, road load as a Coulomb brake, air drag.
@@ -107,7 +107,7 @@ def _clutch_torque(m, y, mode):
     s, mu = abs(y[W_P] - y[W_1]), 0.0
     for c in m.mu:
         mu = mu * s + c
-    return mode * f_n * (1.0 - math.exp(-f_n / m.r[A.F_KNEE])) * max(mu, 0.0)
+    return mode * f_n * f_n / (f_n + m.r[A.F_KNEE]) * max(mu, 0.0)
 
 
 def _axle(m, y):

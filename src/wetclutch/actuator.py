@@ -152,8 +152,11 @@ def evaluate(x, act, u, ext, dx):
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
 def friction_factor(f_n, act):
-    """Drop of the friction at low normal force (plates barely pressed, spec 6)."""
-    return 1.0 - np.exp(-f_n / act[F_KNEE]) if act[F_KNEE] > 0.0 else 1.0
+    """Drop of the friction at low normal force (plates barely pressed, spec 6): ``F / (F + F_knee)``.
+
+    A rational knee rather than ``1 - exp(-F/F_knee)``: the same shape to within the
+    study's scatter, without a transcendental function in every evaluation."""
+    return f_n / (f_n + act[F_KNEE]) if act[F_KNEE] > 0.0 else 1.0
 
 
 N_STATES = 4  # I, p, V_in, V_out

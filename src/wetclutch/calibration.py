@@ -61,10 +61,16 @@ def onset(p: Params, duty: float, temp: float, t_end: float = 3.0) -> tuple[floa
     """(dead time s, pressure Pa at onset) for a PWM step from 0 to ``duty`` at ``T_STEP``."""
     rn = clutch.build(p, Step(1.0, 0.0, duty), pwm=True, temp_C=temp)
     tr = integrate(rn.network, t_end, dt_out=1e-4)
-    i = np.flatnonzero(np.abs(tr.clutch_torque("clutch")) > TORQUE_ONSET)
-    if i.size == 0:
+    torque = np.abs(tr.clutch_torque("clutch"))
+    i = np.flatnonzero(torque > TORQUE_ONSET)
+    if i.size == 0 or i[0] == 0:
         return np.nan, np.nan
-    return float(tr.t[i[0]] - 1.0), float(tr.x[i[0], rn.i_pressure])
+    # the crossing between the two samples that straddle it (the pressure rises steeply there)
+    k = i[0]
+    f = (TORQUE_ONSET - torque[k - 1]) / (torque[k] - torque[k - 1])
+    t_on = tr.t[k - 1] + f * (tr.t[k] - tr.t[k - 1])
+    p_on = tr.x[k - 1, rn.i_pressure] + f * (tr.x[k, rn.i_pressure] - tr.x[k - 1, rn.i_pressure])
+    return float(t_on - 1.0), float(p_on)
 
 
 def staircase(p: Params, duties: np.ndarray, temp: float = 85.0, dwell: float = 1.5) -> tuple[np.ndarray, np.ndarray]:

@@ -124,7 +124,7 @@ class Hydraulics(_Section):
 
 
 class Friction(_Section):
-    """Plate friction: T_max = mu(slip) * mu_scale * F_n * (1 - exp(-F_n / F_knee))."""
+    """Plate friction: T_max = mu(slip) * mu_scale * F_n * F_n / (F_n + F_knee)."""
 
     mu_slip_poly: list[float] = Field(
         [-1.7e-6, 2.7e-4, 2.6e-2],
@@ -134,7 +134,7 @@ class Friction(_Section):
         max_length=8,
     )
     mu_scale: float = _f(1.0, "-", "multiplier on mu (unit-to-unit and condition spread)", gt=0.0, le=10.0)
-    F_knee: float = _f(150.0, "N", "normal force below which friction drops (plates barely pressed)", ge=0.0, le=1e5)
+    F_knee: float = _f(100.0, "N", "normal force below which friction drops (plates barely pressed)", ge=0.0, le=1e5)
     drag_20C: float = _f(0.013, "N m s", "open-clutch viscous drag coefficient at 20 C (scales with viscosity)", ge=0.0, le=10.0)
 
 
