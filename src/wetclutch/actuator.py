@@ -13,8 +13,10 @@ normal force of the clutch.
 Chain of effects::
 
     u (V or duty) -> amplifier / PWM -> coil (L, R) -> I -> F_mag(I) = k_F1 I + k_F2 I^2
-    stem: m x'' = F_mag + F_preload - A_fb p - c x - d x' - friction
-    x > overlap: supply -> clutch through the stem port in series with a laminar supply line;
+    stem: m x'' = F_mag + F_preload - A_fb p - F_flow - c x - d x' - friction
+    F_flow = k_flow (opening x pressure drop across the port): the steady flow force
+    x > overlap: supply -> clutch through the stem port, in series with the clutch installation's
+                 feed restriction (turbulent) and feed line (laminar);
     x < -overlap: clutch -> tank;  seal leakage (laminar);  relief above p_relief
     dp/dt = (Q_in - Q_drain - Q_leak - Q_relief) / C(p)
     C(p) = V(p)/K_oil (+ A_p^2 / k_reset while the piston strokes)
@@ -73,13 +75,15 @@ from .oil import _k_eff_j as effective_bulk_modulus
     X_CONTACT,
     K_OIL,  # pure-oil bulk modulus at the oil temperature
     AIR,  # entrained air volume fraction at atmospheric pressure
+    K_FLOW,  # steady flow force per (opening x pressure drop), N/(m Pa)
+    A_FEED,  # turbulent feed restriction of the clutch installation, m^3/(s Pa^0.5); 0: none
     K_RESTRICT,  # turbulent outflow Q = K sqrt(p): seal rings, or the valve test's restriction
     G_LEAK,
     P_RELIEF,
     G_RELIEF,
     F_KNEE,
     N_ACT,
-) = range(38)
+) = range(40)
 
 DC, PWM = 0, 1
 
@@ -127,8 +131,11 @@ def evaluate(x, act, u, ext, dx):
     o_drn = min(max(-xs - act[OVERLAP], 0.0), act[X_PORT])
     q_in = 0.0
     if o_sup > 0.0:
-        # stem port (turbulent, a sqrt(dp)) in series with the laminar supply line (R_line Q)
+        # stem port and feed restriction (turbulent, a sqrt(dp); in series they combine as
+        # 1/a^2 = 1/a_port^2 + 1/a_feed^2) in series with the laminar supply line (R_line Q)
         a = act[CDW] * o_sup * np.sqrt(2.0 / act[RHO])
+        if act[A_FEED] > 0.0:
+            a = a * act[A_FEED] / np.sqrt(a * a + act[A_FEED] * act[A_FEED])
         dp = act[P_SUP] - p
         a2r = a * a * act[R_LINE]
         q_in = 0.5 * (-a2r + np.sqrt(a2r * a2r + 4.0 * a * a * abs(dp)))
@@ -146,7 +153,10 @@ def evaluate(x, act, u, ext, dx):
     dx[i0 + 2] = q_in
     dx[i0 + 3] = q_drn + q_leak + q_rel
     f_mag = act[K_F1] * cur + act[K_F2] * cur * cur
-    f_stem = f_mag + act[F_PRE] - act[A_FB] * p
+    # steady flow (Bernoulli) force: the jet through an open port pulls the stem towards closing
+    dp_in = act[P_SUP] - p - act[R_LINE] * q_in
+    f_flow = act[K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * max(p, 0.0))
+    f_stem = f_mag + act[F_PRE] - act[A_FB] * p - f_flow
     return f_stem, normal_force(p, act)
 
 

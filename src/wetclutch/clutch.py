@@ -10,8 +10,9 @@ Two configurations, as in the study:
     The study's valve test: the clutch is replaced by a downstream restriction
     passing ``VALVE_TEST_FLOW`` at the supply pressure (continuous flow instead of a
     dead-end volume); there is no driveline. The valve sits on the test bench's
-    pump directly: the clutch's feed line (``hydraulics.line_*``), which could not
-    pass 32 l/min at 8 bar, is not part of this test.
+    pump directly: the clutch installation's feed line and feed restriction
+    (``hydraulics.line_*``, ``hydraulics.feed_orifice``), which could not pass 32 l/min
+    at 8 bar, are not part of this test.
 
 The oil temperature is a parameter of the experiment (``rig.oil_temp_C``); the
 oil's viscosity (supply line loss, leakage, open-clutch drag), density and bulk
@@ -50,6 +51,8 @@ def actuator_record(params: Params, temp_C: float, config: str = "clutch") -> np
     r[A.K_AMP], r[A.G_CURRENT] = v.amp_gain, v.g_current
     r[A.K_F1], r[A.K_F2], r[A.F_PRE], r[A.A_FB] = v.k_F1, v.k_F2, v.F_preload, v.A_fb
     r[A.OVERLAP], r[A.X_PORT], r[A.CDW] = v.overlap, v.x_port, v.C_d * v.port_width
+    # Merritt's steady flow force, jet angle 69 degrees
+    r[A.K_FLOW] = v.flow_force * 2.0 * v.C_d * v.port_width * np.cos(np.radians(69.0))
     r[A.RHO] = oil.density(temp_C)
     r[A.P_SUP] = h.p_supply
     # Hagen-Poiseuille: laminar loss of the clutch's feed line, proportional to viscosity
@@ -64,6 +67,7 @@ def actuator_record(params: Params, temp_C: float, config: str = "clutch") -> np
         r[A.A_P], r[A.K_RESET], r[A.X_CONTACT] = h.A_p, h.k_reset, h.x_contact
         r[A.P_PRE], r[A.P_CONTACT] = h.p_prestress, p_contact(params)
         r[A.K_RESTRICT] = h.leak_orifice
+        r[A.A_FEED] = v.C_d * h.feed_orifice * np.sqrt(2.0 / r[A.RHO])
     else:
         # no piston: the volume is the hose to the restriction
         r[A.A_P], r[A.K_RESET], r[A.X_CONTACT] = 0.0, 1.0, 0.0

@@ -103,6 +103,7 @@ class Valve(_Section):
     x_port: float = _f(1e-3, "m", "stem travel over which a port opens fully", gt=0.0, le=1e-1)
     port_width: float = _f(0.012, "m", "circumferential width of the metering edge", gt=0.0, le=1.0)
     C_d: float = _f(0.65, "-", "orifice discharge coefficient", gt=0.0, le=1.0)
+    flow_force: float = _f(0.0, "-", "steady flow force coefficient: F = flow_force * 2 C_d w x dp cos(69 deg)", ge=0.0, le=5.0)
 
 
 class Hydraulics(_Section):
@@ -111,6 +112,7 @@ class Hydraulics(_Section):
     p_supply: float = _f(8e5, "Pa", "pump pressure (gauge)", gt=0.0, le=5e6)
     line_diameter: float = _f(4e-3, "m", "supply line diameter (laminar loss)", gt=0.0, le=0.1)
     line_length: float = _f(1.3, "m", "supply line length (laminar loss)", ge=0.0, le=100.0)
+    feed_orifice: float = _f(0.0, "m^2", "area of the feed restriction of the clutch installation (0: none)", ge=0.0, le=1e-2)
     V0: float = _f(1e-4, "m^3", "oil volume behind the valve with the piston at its stop", gt=0.0, le=1e-2)
     A_p: float = _f(0.0122, "m^2", "piston area", gt=0.0, le=1.0)
     k_reset: float = _f(1.63e5, "N/m", "reset spring stiffness", gt=0.0, le=1e9)
