@@ -99,3 +99,25 @@ def test_pwm_duty_sets_the_mean_coil_current():
     v = wc.Params().valve
     mean_i = np.mean(tr.x[tr.t > 1.5, rn.i_current])
     assert mean_i == pytest.approx(0.1 * v.V_supply / v.R_coil, rel=0.02)
+
+
+def test_feed_restriction_and_port_act_as_orifices_in_series():
+    """Two equal turbulent orifices in series pass 1/sqrt(2) of one (no laminar line)."""
+    p = wc.load_params(overrides={"hydraulics.line_length": 0.0})
+    rec = clutch.actuator_record(p, 85.0)
+    nx = 12
+    rec[A.STATE], rec[A.STEM_SPRING] = 8, 0
+    x = np.zeros(nx)
+    x[0] = 1.0  # stem far open: the port is fully uncovered
+    ext = np.zeros(1)
+    dx_one, dx_two = np.zeros(nx), np.zeros(nx)
+    A.evaluate(x, rec, 0.0, ext, dx_one)
+    rec[A.A_FEED] = rec[A.CDW] * rec[A.X_PORT] * np.sqrt(2.0 / rec[A.RHO])  # the same area as the port
+    A.evaluate(x, rec, 0.0, ext, dx_two)
+    assert dx_two[10] == pytest.approx(dx_one[10] / np.sqrt(2.0), rel=1e-12)
+
+
+def test_flow_force_lowers_the_valve_test_pressure():
+    base = calibration.staircase(wc.Params(), np.array([0.1]))[0][0]
+    ff = calibration.staircase(wc.load_params(overrides={"valve.flow_force": 1.0}), np.array([0.1]))[0][0]
+    assert ff < base - 0.1e5
