@@ -620,7 +620,7 @@ class Workspace(NamedTuple):
     x: np.ndarray  # current state
     clm: np.ndarray  # clutch modes
     grm: np.ndarray  # gear modes (+1 forward, -1 backward, 0 stuck)
-    fstate: np.ndarray  # [t, h, previous accepted error, next PWM edge, PWM period start]
+    fstate: np.ndarray  # [t, h, log of the previous accepted error, next PWM edge, PWM period start]
     istate: np.ndarray  # [need_settle, n_out, n_steps, n_rejected, n_events, n_switches, n_evlog, last event fn]
     K: np.ndarray  # (7, nx) stages
     dx: np.ndarray
@@ -641,7 +641,7 @@ class Workspace(NamedTuple):
     evlog: np.ndarray  # (max_events, 3): t, element index, new mode
 
 
-@_jit
+@_jit_inline
 def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
     """State and event functions at ``theta_t`` inside the last step (fixed modes)."""
     _dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
@@ -664,7 +664,7 @@ def _emit(t, y, ws, net, ext, out_t, out_x, out_aux, out_mode):
     ws.istate[1] = i + 1
 
 
-@_jit
+@_jit_inline
 def _log_modes(t, before, ws):
     for j in range(ws.clm.shape[0]):
         if ws.clm[j] != before[j] and before[j] != UNDECIDED:
@@ -677,7 +677,7 @@ def _log_modes(t, before, ws):
             ws.istate[5] += 1
 
 
-@_jit
+@_jit_inline
 def _restart(ws, net, ext):
     """Re-decide modes at the current time and refresh the first stage."""
     t = ws.fstate[0]
@@ -784,9 +784,10 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
             return ERR_SINGULAR
         err = _error_norm(y_old, ws.y_new, ws.K, h, rtol, atol)
         # PI step control (Hairer's DOPRI5): steadier near the stability limit
-        fac11 = (err + 1e-30) ** 0.17
+        # in logarithms: one log and one exp per step instead of two powers
+        log_err = np.log(err + 1e-30)
         if err > 1.0:
-            ws.fstate[1] = h / min(5.0, fac11 / 0.9)
+            ws.fstate[1] = h / min(5.0, np.exp(0.17 * log_err) / 0.9)
             ws.istate[3] += 1
             continue
         ws.istate[2] += 1
@@ -857,8 +858,8 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
         _copy(ws.x, ws.y_new)
         t = t_new
         ws.fstate[0] = t
-        fac = max(0.1, min(5.0, fac11 / ws.fstate[2] ** 0.04 / 0.9))
-        ws.fstate[2] = max(err, 1e-4)
+        fac = max(0.1, min(5.0, np.exp(0.17 * log_err - 0.04 * ws.fstate[2]) / 0.9))
+        ws.fstate[2] = max(log_err, np.log(1e-4))
         ws.fstate[1] = h / fac if not at_lim else max(ws.fstate[1], h)
         if at_lim and (hit_bp or hit_pwm):
             if hit_bp:
