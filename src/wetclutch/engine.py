@@ -641,7 +641,7 @@ class Workspace(NamedTuple):
     evlog: np.ndarray  # (max_events, 3): t, element index, new mode
 
 
-@_jit_inline
+@_jit
 def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
     """State and event functions at ``theta_t`` inside the last step (fixed modes)."""
     _dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
@@ -664,7 +664,7 @@ def _emit(t, y, ws, net, ext, out_t, out_x, out_aux, out_mode):
     ws.istate[1] = i + 1
 
 
-@_jit_inline
+@_jit
 def _log_modes(t, before, ws):
     for j in range(ws.clm.shape[0]):
         if ws.clm[j] != before[j] and before[j] != UNDECIDED:
@@ -677,7 +677,7 @@ def _log_modes(t, before, ws):
             ws.istate[5] += 1
 
 
-@_jit_inline
+@_jit
 def _restart(ws, net, ext):
     """Re-decide modes at the current time and refresh the first stage."""
     t = ws.fstate[0]
