@@ -391,7 +391,6 @@ def _events(x, dx, aux, net, clm, grm, g):
             g[2 * j] = m * _slip(x, net, j)
             g[2 * j + 1] = cap
     ng = net.gr_in.shape[0]
-    ns = net.sp_k.shape[0]
     for k in range(ng):
         lam = aux[2 * nc + k]
         if abs(grm[k]) == STUCK:
@@ -731,7 +730,6 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
 
     Returns a status code (``OK``, ``ERR_SINGULAR``, ``ERR_ZENO``).
     """
-    nx = ws.x.shape[0]
     n_grid = out_t.shape[0]
     y_old = ws.y_old
     t = ws.fstate[0]
