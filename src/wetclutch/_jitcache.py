@@ -15,7 +15,7 @@ from pathlib import Path
 
 _PKG = Path(__file__).resolve().parent
 #: modules whose jitted functions call each other
-CORE = ("signals.py", "oil.py", "actuator.py", "engine.py")
+CORE = ("signals.py", "oil.py", "actuator.py", "engine.py", "control.py", "launch.py")
 
 
 def ensure_consistent() -> None:

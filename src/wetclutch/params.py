@@ -62,7 +62,11 @@ class Driveline(_Section):
     ratio: float = _f(0.5, "-", "CVT speed ratio i = w_r / w_1", gt=0.05, le=20.0)
     eta: float = _f(0.95, "-", "CVT efficiency, either power-flow direction", gt=0.0, le=1.0)
     k_a: float = _f(480.0, "N m/rad", "flexible axle torsional stiffness", gt=0.0, le=1e8)
-    d_a: float = _f(1.5, "N m s/rad", "flexible axle damping", ge=0.0, le=1e5)
+    # The study gives no damping figure. 5 N m s/rad keeps the slip phase free of
+    # friction-induced judder: above 79 rad/s the study's mu(slip) falls with slip, a
+    # negative damping F_n |dmu/dw| on the CVT input that the axle damping, seen through
+    # the ratio (d_a i^2), must outweigh up to the 150 N m of a hard launch.
+    d_a: float = _f(5.0, "N m s/rad", "flexible axle damping", ge=0.0, le=1e5)
     omega_p0: float = _f(150.0, "rad/s", "primary flywheel speed at the start of a run", ge=0.0, le=2000.0)
 
 

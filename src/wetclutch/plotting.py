@@ -67,3 +67,37 @@ def plot_rig(measured: pd.DataFrame, truth: pd.DataFrame, path: Path, title: str
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def plot_launch(signals: pd.DataFrame, truth: pd.DataFrame, summary: dict, path: Path, extra: pd.DataFrame | None = None,
+                extra_label: str = "baseline") -> None:
+    """A launch: request and axle torque, pressure, valve input, speeds (``extra``: a second launch to compare)."""
+    fig, axes = plt.subplots(4, 1, figsize=(9, 9), sharex=True)
+    t = signals["time"]
+    ax = axes[0]
+    ax.plot(t, signals["t_ref"], "k--", lw=1.2, label="request t_ref")
+    ax.plot(t, signals["T_r"], lw=0.8, label=f"T_r measured ({summary.get('controller', '')})")
+    ax.plot(truth["time"], truth["T_r"], lw=1.0, alpha=0.8, label="T_r true")
+    if extra is not None:
+        ax.plot(extra["time"], extra["T_r"], lw=0.8, alpha=0.8, label=f"T_r {extra_label}")
+    ax.set_title("Axle torque [N m]", fontsize=10, loc="left")
+    axes[1].plot(t, signals["p_clutch"] * 1e-5, lw=0.8, label="p_clutch measured")
+    if extra is not None:
+        axes[1].plot(extra["time"], extra["p_clutch"] * 1e-5, lw=0.8, alpha=0.8, label=f"p_clutch {extra_label}")
+    axes[1].set_title("Clutch pressure [bar]", fontsize=10, loc="left")
+    axes[2].plot(t, signals["u"], lw=0.8, label="u")
+    if extra is not None:
+        axes[2].plot(extra["time"], extra["u"], lw=0.8, alpha=0.8, label=f"u {extra_label}")
+    axes[2].set_title("Valve input [V]", fontsize=10, loc="left")
+    for c in ("omega_p", "omega_1", "omega_s"):
+        axes[3].plot(t, signals[c], lw=0.8, label=c)
+    axes[3].set_title("Speeds [rad/s]", fontsize=10, loc="left")
+    for a in axes:
+        a.grid(True, alpha=0.3)
+        a.legend(loc="upper right", fontsize=7, ncol=2)
+    axes[-1].set_xlabel("time [s]")
+    req = summary.get("requirements", {})
+    fig.suptitle("launch: " + ", ".join(f"{k} {'pass' if v else 'FAIL'}" for k, v in req.items()))
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
