@@ -12,9 +12,9 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $(STAMP)
 
-## demo: the main job on the built-in default rig
+## demo: the main job on the built-in default rig: controlled launches, verification, report
 demo: $(STAMP)
-	$(BIN)/wetclutch simulate engage --out out/engage
+	$(BIN)/wetclutch report --out out/report
 
 ## test: the whole test suite
 test: $(STAMP)
@@ -24,6 +24,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_engine.py
 	$(BIN)/python benchmarks/bench_actuator.py
+	$(BIN)/python benchmarks/bench_launch.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

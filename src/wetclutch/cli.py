@@ -114,6 +114,41 @@ def _cmd_calibration(args: argparse.Namespace) -> None:
     print(f"{sum(f.passed for f in figs)} of {len(figs)} figures within tolerance -> {args.out}/report.md")
 
 
+def _cmd_launch(args: argparse.Namespace) -> None:
+    from . import launch
+
+    p = _load_params(args)
+    cond = launch.Conditions(t_ref=args.t_ref, profile=args.profile, oil_temp_C=args.oil_temp, seed=args.seed,
+                             noise=not args.no_noise, noise_scale=args.noise_scale)
+    res = launch.simulate(p, args.controller, cond)
+    launch.write(res, args.out, p)
+    s = res.summary
+    req = ", ".join(f"{k} {'pass' if v else 'FAIL'}" for k, v in s["requirements"].items())
+    fmt = lambda v, f: "-" if v is None else format(v, f)  # noqa: E731
+    print(f"launch {args.controller}: ess {fmt(s['steady_state_error_pct'], '.2f')} %, t95 {fmt(s['t95_s'], '.3f')} s, "
+          f"overshoot {fmt(s['overshoot_pct'], '.1f')} %, t_sync {fmt(s['t_sync_s'], '.2f')} s; {req} -> {args.out}")
+
+
+def _cmd_verify(args: argparse.Namespace) -> None:
+    from . import report, verify
+
+    res = verify.run(args.samples, args.seed, args.workers, args.controller, progress=not args.quiet)
+    report.write_verify(res, args.out)
+    rate = res["pass_rate_per_requirement"]
+    print(f"verify {args.controller}: {res['cases']} launches, all three requirements in {100 * res['pass_rate']:.1f} % "
+          f"(ess {100 * rate['steady_state_error']:.1f} %, t95 {100 * rate['response_time']:.1f} %, "
+          f"robust {100 * rate['robustness']:.1f} %) -> {args.out}")
+
+
+def _cmd_report(args: argparse.Namespace) -> None:
+    from . import report
+
+    s = report.main_job(args.out, args.samples, args.baseline_samples, args.seed, args.workers, progress=not args.quiet)
+    print(f"report: launch controller meets all requirements in {100 * s['verify']['pass_rate']:.1f} % of "
+          f"{s['verify']['cases']} launches, PI baseline in {100 * s['verify_baseline']['pass_rate']:.1f} % "
+          f"-> {args.out}/report.md")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="wetclutch", description="Wet-clutch driveline model, virtual rig, identification, control.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -147,6 +182,36 @@ def build_parser() -> argparse.ArgumentParser:
     cal.add_argument("--out", required=True, metavar="DIR")
     _param_args(cal)
     cal.set_defaults(func=_cmd_calibration)
+
+    lau = sub.add_parser("launch", help="a controlled launch from standstill: signals.csv, summary.json, plot.png")
+    lau.add_argument("--out", required=True, metavar="DIR")
+    lau.add_argument("--controller", choices=("launch", "pi"), default="launch", help="design (launch) or PI baseline")
+    lau.add_argument("--t-ref", type=float, default=100.0, metavar="NM", help="requested axle torque T_r, N m (default 100)")
+    lau.add_argument("--profile", default="step", metavar="step|ramp|FILE", help="request profile or CSV (time, t_ref)")
+    lau.add_argument("--oil-temp", type=float, metavar="C", help="oil temperature, C (default rig.oil_temp_C)")
+    lau.add_argument("--seed", type=int, default=0, metavar="N", help="sensor noise seed")
+    lau.add_argument("--noise-scale", type=float, default=1.0, metavar="X", help="multiplier on the sensor noise")
+    lau.add_argument("--no-noise", action="store_true", help="ideal sensors")
+    _param_args(lau)
+    lau.set_defaults(func=_cmd_launch)
+
+    ver = sub.add_parser("verify", help="Monte Carlo and corner-case verification of a launch controller")
+    ver.add_argument("--out", required=True, metavar="DIR")
+    ver.add_argument("--samples", type=int, default=1000, metavar="N", help="random samples (default 1000; plus 16 corners)")
+    ver.add_argument("--seed", type=int, default=0, metavar="S")
+    ver.add_argument("--workers", type=int, metavar="W", help="processes (default: all cores)")
+    ver.add_argument("--controller", choices=("launch", "pi"), default="launch")
+    ver.add_argument("--quiet", action="store_true", help="no progress bar")
+    ver.set_defaults(func=_cmd_verify)
+
+    rep = sub.add_parser("report", help="the main job: nominal launches, verification of design and baseline, report.md")
+    rep.add_argument("--out", required=True, metavar="DIR")
+    rep.add_argument("--samples", type=int, default=1000, metavar="N")
+    rep.add_argument("--baseline-samples", type=int, default=200, metavar="N")
+    rep.add_argument("--seed", type=int, default=0, metavar="S")
+    rep.add_argument("--workers", type=int, metavar="W")
+    rep.add_argument("--quiet", action="store_true")
+    rep.set_defaults(func=_cmd_report)
 
     par = sub.add_parser("params", help="show or export the parameter record")
     psub = par.add_subparsers(dest="params_command", required=True, parser_class=_Parser)

@@ -33,9 +33,17 @@ over a flat record of its settings (``ctrl``) and its own state vector
       static pressure-vs-voltage map at the measured oil temperature
       (gain scheduling on temperature: the map is tabulated over 20 to 100 C).
     * **Feedback on pressure and on torque.** A PI loop on the measured pressure
-      removes static-map errors; an integrator on the torque error adjusts the
-      pressure target, which absorbs friction that differs from the nominal
-      (slip dependence, unit-to-unit spread, kiss-point error).
+      removes static-map errors. Friction differs from unit to unit by some
+      20 %; an integrator alone would take too long to make that up within
+      0.2 s, so the controller also estimates a friction factor ``theta`` (the
+      measured ``T_r`` over the nominal model's torque at the measured pressure,
+      low-pass filtered) and scales its friction law by it: an adaptive
+      feedforward. An integrator on the torque error removes what is left
+      (efficiency, kiss-point error). The slip in ``mu(slip)`` comes from the
+      primary and secondary flywheels, whose speeds are smooth.
+    * **Dither.** In DC mode nothing shakes the valve stem, whose friction then
+      makes the pressure stall in steps (the study's reason for PWM). A small
+      square-wave dither on the input (0.05 V at 125 Hz) keeps it moving.
     * **Anti-windup.** Both integrators stop when the input saturates in the
       direction that would wind them further (conditional integration), and
       the pressure target is limited to the supply pressure.
@@ -63,13 +71,13 @@ KIND, DT, U_MIN, U_MAX = range(4)
 LAUNCH, PI = 0, 1
 # launch controller
 (P_KISS, HOLD_OFFSET, FILL_EXIT, A_P, RATIO, ETA, MU2, MU1, MU0, F_KNEE, KP_P, KI_P, KP_T, KI_T, P_MAX, TAU_REF,
- HOLD_RATE, FF_T0, FF_DT, FF_NT, FF_P0, FF_DP, FF_NP) = range(4, 27)
-FF_TABLE = 27  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
+ HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, FF_T0, FF_DT, FF_NT, FF_P0, FF_DP, FF_NP) = range(4, 31)
+FF_TABLE = 31  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
 # PI baseline (shares the slots after the common fields)
 KP_B, KI_B = 4, 5
 
 # --- controller state
-CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET = range(6)
+CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K = range(8)
 N_CS = 8
 FILL, HOLD, TORQUE, LOCKUP = 0, 1, 2, 3
 SYNC_SLIP = 2.0  # rad/s: measured slip below which the clutch counts as synchronised
@@ -93,10 +101,15 @@ def _table(ctrl, temp, p):
 
 
 @_jit
-def _pressure_target(ctrl, t_ref, slip):
-    """Pressure (Pa) that gives axle torque ``t_ref`` under the nominal friction law."""
+def _mu(ctrl, slip):
     s = abs(slip)
-    mu = max((ctrl[MU2] * s + ctrl[MU1]) * s + ctrl[MU0], 1e-4)
+    return max((ctrl[MU2] * s + ctrl[MU1]) * s + ctrl[MU0], 1e-4)
+
+
+@_jit
+def _pressure_target(ctrl, t_ref, slip, theta):
+    """Pressure (Pa) that gives axle torque ``t_ref`` under the nominal friction law scaled by ``theta``."""
+    mu = _mu(ctrl, slip) * theta
     t_c = max(t_ref, 0.0) * ctrl[RATIO] / ctrl[ETA]
     f = t_c / mu
     # invert the knee F_eff = F^2 / (F + F_knee)
@@ -122,6 +135,7 @@ def _launch(ctrl, cs, meas, t_ref):
     if phase == HOLD and t_ref > 0.0:
         phase = TORQUE
         cs[CS_REF] = 0.0
+        cs[CS_THETA] = ctrl[THETA0]
     if phase == TORQUE and abs(meas[M_WP] - meas[M_W1]) < SYNC_SLIP and meas[M_W1] > 0.0:
         # synchronised: the clutch can carry no more torque; close it firmly
         phase = LOCKUP
@@ -141,8 +155,16 @@ def _launch(ctrl, cs, meas, t_ref):
         # slip from the secondary flywheel, not from omega_1: the light CVT input shakes
         # with the clutch torque, and feeding that back through mu(slip) closes a fast loop
         slip = meas[M_WP] - meas[M_WS] / ctrl[RATIO]
-        sens = _pressure_target(ctrl, r + 1.0, slip) - _pressure_target(ctrl, r, slip)  # Pa per N m, nominal
-        p_set = _pressure_target(ctrl, r, slip) + cs[CS_ZT] + ctrl[KP_T] * sens * e_t
+        # friction estimate: measured torque over the nominal model's at the measured
+        # pressure, once the plates press hard enough for the ratio to mean something
+        f_n = (p - ctrl[P_KISS]) * ctrl[A_P]
+        if f_n > ctrl[F_KNEE] * 1.5:
+            t_model = ctrl[ETA] / ctrl[RATIO] * _mu(ctrl, slip) * f_n * f_n / (f_n + ctrl[F_KNEE])
+            theta = min(max(meas[M_TR] / t_model, 0.5), 2.0)
+            cs[CS_THETA] += (theta - cs[CS_THETA]) * dt / (ctrl[TAU_THETA] + dt)
+        th = cs[CS_THETA]
+        sens = _pressure_target(ctrl, r + 1.0, slip, th) - _pressure_target(ctrl, r, slip, th)  # Pa per N m
+        p_set = _pressure_target(ctrl, r, slip, th) + cs[CS_ZT] + ctrl[KP_T] * sens * e_t
         p_set = min(max(p_set, p_hold), ctrl[P_MAX])
         u_prev = cs[CS_U]
         wind_up = (u_prev >= ctrl[U_MAX] and e_t > 0.0) or (u_prev <= ctrl[U_MIN] and e_t < 0.0)
@@ -161,7 +183,13 @@ def _launch(ctrl, cs, meas, t_ref):
     else:
         cs[CS_ZP] += ctrl[KI_P] * e_p * dt
     cs[CS_U] = u
-    return u
+    # a square-wave dither on top: it keeps the valve stem from sticking (the DC
+    # drive lacks the dither that PWM gives); the integrators do not see it
+    k = int(cs[CS_K])
+    cs[CS_K] = k + 1
+    half = max(int(ctrl[DITHER_HALF]), 1)
+    d = ctrl[DITHER_AMP] if (k // half) % 2 == 0 else -ctrl[DITHER_AMP]
+    return min(max(u + d, ctrl[U_MIN]), ctrl[U_MAX])
 
 
 @_jit
@@ -203,6 +231,14 @@ class LaunchGains:
         gains on the torque error, scaled by the nominal pressure per N m.
     tau_ref : float
         Time constant of the first-order prefilter on the torque request, s.
+    tau_theta : float
+        Time constant of the friction estimate (measured over nominal torque), s.
+    theta0 : float
+        Friction factor assumed until it is measured: on the high side of the
+        spread, so that a grippy unit does not overshoot before the estimate
+        catches up (a slippery one is a little slower instead).
+    dither_amp, dither_hz : float
+        Square-wave dither on the valve input (V, Hz) against stem stick-slip.
     """
 
     hold_offset: float = 0.05e5
@@ -213,6 +249,10 @@ class LaunchGains:
     kp_t: float = 0.0
     ki_t: float = 8.0
     tau_ref: float = 0.03
+    tau_theta: float = 0.01
+    theta0: float = 1.2
+    dither_amp: float = 0.05
+    dither_hz: float = 125.0
 
 
 @dataclass(frozen=True)

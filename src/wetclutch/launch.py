@@ -94,7 +94,7 @@ def _closed_loop(net, ext, ws, u_slot, idx, phys, sensors, noise, ctrl, cs, t_re
     return engine.OK, n
 
 
-def sensor_table(dt: float, noise: bool, sensors=measurement.DEFAULT_SENSORS) -> np.ndarray:
+def sensor_table(dt: float, noise: bool, sensors=measurement.DEFAULT_SENSORS, noise_scale: float = 1.0) -> np.ndarray:
     """Per channel: b0 b1 b2 a1 a2 zi0 zi1 noise_std resolution min_speed has_filter (see :func:`_closed_loop`)."""
     table = np.zeros((len(CHANNELS), 11))
     if not noise:
@@ -107,7 +107,7 @@ def sensor_table(dt: float, noise: bool, sensors=measurement.DEFAULT_SENSORS) ->
             table[c, 3:5] = sos[4:6]
             table[c, 5:7] = ss.sosfilt_zi(sos[None, :])[0]
             table[c, 10] = 1.0
-        table[c, 7] = spec.noise_std
+        table[c, 7] = spec.noise_std * noise_scale
         table[c, 8] = spec.resolution
         table[c, 9] = spec.min_speed or 0.0
     return table
@@ -137,6 +137,7 @@ class Conditions:
     dt: float = 1e-3
     seed: int = 0
     noise: bool = True
+    noise_scale: float = 1.0
 
     def checked(self) -> Conditions:
         if not 0.0 < self.t_ref <= 1000.0:
@@ -145,6 +146,8 @@ class Conditions:
             raise WetclutchError(f"--oil-temp {self.oil_temp_C:g} C is outside -30..150 C")
         if self.profile not in PROFILES and not Path(self.profile).is_file():
             raise WetclutchError(f"--profile must be step, ramp or an existing CSV file (got '{self.profile}')")
+        if not 0.0 <= self.noise_scale <= 10.0:
+            raise WetclutchError(f"--noise-scale must be in 0..10 (got {self.noise_scale:g})")
         if not 1e-4 <= self.dt <= 1e-2:
             raise WetclutchError(f"controller sample time must be in 0.1..10 ms (got {self.dt * 1e3:g} ms)")
         if not self.t_request + 0.5 < self.t_max <= 120.0:
@@ -185,7 +188,7 @@ def controller_record(name: str, params: Params, gains: Any = None, dt: float = 
         r[control.KP_B], r[control.KI_B] = g.kp, g.ki
     else:
         g = gains or control.LaunchGains()
-        table = _feedforward(params.model_dump_json())
+        table = _feedforward(params)
         r = np.zeros(control.FF_TABLE + table.size)
         r[control.KIND] = control.LAUNCH
         h, d, f = params.hydraulics, params.driveline, params.friction
@@ -198,8 +201,9 @@ def controller_record(name: str, params: Params, gains: Any = None, dt: float = 
         r[control.MU2], r[control.MU1], r[control.MU0] = mu
         r[control.F_KNEE] = f.F_knee
         r[control.KP_P], r[control.KI_P] = g.kp_p, g.ki_p
-        r[control.KP_T], r[control.KI_T], r[control.TAU_REF] = g.kp_t, g.ki_t, g.tau_ref
+        r[control.KP_T], r[control.KI_T], r[control.TAU_REF], r[control.TAU_THETA], r[control.THETA0] = g.kp_t, g.ki_t, g.tau_ref, g.tau_theta, g.theta0
         r[control.P_MAX] = min(h.p_supply, h.p_relief)
+        r[control.DITHER_AMP], r[control.DITHER_HALF] = g.dither_amp, round(0.5 / (g.dither_hz * dt))
         T, P = control.MAP_TEMPS, control.MAP_PRESSURES
         r[control.FF_T0], r[control.FF_DT], r[control.FF_NT] = T[0], T[1] - T[0], T.size
         r[control.FF_P0], r[control.FF_DP], r[control.FF_NP] = P[0], P[1] - P[0], P.size
@@ -209,9 +213,27 @@ def controller_record(name: str, params: Params, gains: Any = None, dt: float = 
     return r
 
 
+def design_params(rig: Params) -> Params:
+    """What the controller is designed on: the default rig at the rig's CVT ratio.
+
+    The transmission controller commands the ratio, so it knows it; everything
+    else (friction, fill, efficiency, stiffness, temperature) it must cope with.
+    """
+    d = Params()
+    d.driveline.ratio = rig.driveline.ratio
+    return d
+
+
+def _feedforward(params: Params) -> np.ndarray:
+    # keyed on the sections the static pressure map depends on, so that designs
+    # differing only in the driveline share one table
+    key = json.dumps({k: params.model_dump()[k] for k in ("valve", "hydraulics", "friction")}, sort_keys=True)
+    return _feedforward_table(key)
+
+
 @functools.lru_cache(maxsize=8)
-def _feedforward(params_json: str) -> np.ndarray:
-    params = Params.model_validate_json(params_json)
+def _feedforward_table(key: str) -> np.ndarray:
+    params = Params.model_validate(json.loads(key))
     return control.inverse_map(control.static_map(params))
 
 
@@ -250,7 +272,7 @@ def simulate(params: Params | None = None, controller: str = "launch", condition
     p = params if params is not None else Params()
     cond = (conditions or Conditions()).checked()
     temp = p.rig.oil_temp_C if cond.oil_temp_C is None else float(cond.oil_temp_C)
-    ctrl = controller_record(controller, design or Params(), gains, cond.dt)
+    ctrl = controller_record(controller, design or design_params(p), gains, cond.dt)
     rn = clutch.build(p, External(0), pwm=False, config="clutch", temp_C=temp)
     net, x0, ext = rn.network.compile()
     ws = new_workspace(net, x0)
@@ -262,7 +284,7 @@ def simulate(params: Params | None = None, controller: str = "launch", condition
     axle = next(i for i, s in enumerate(rn.network.springs) if s.name == "axle")
     idx = np.array([rn.i_pressure, body["p"], body["1"], body["r"], body["s"], nb + axle], dtype=np.int64)
     phys = np.array([p.driveline.k_a, p.driveline.d_a, temp])
-    sensors = sensor_table(cond.dt, cond.noise)
+    sensors = sensor_table(cond.dt, cond.noise, noise_scale=cond.noise_scale)
     rng = np.random.default_rng(cond.seed)
     noise = rng.standard_normal((n, len(CHANNELS))) if cond.noise else np.zeros((n, len(CHANNELS)))
     out_t = np.zeros(n)
