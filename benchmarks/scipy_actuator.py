@@ -7,12 +7,16 @@ step. Same equations and default parameters (oil at 85 C) as
 ``wetclutch.clutch.build(Params(), Step(1.0, 0.2, 1.0))``: the parameter values are
 read from :mod:`wetclutch`, the dynamics are written here.
 
-State ``y = [w_p, w_1, phi, w_s, x, v, I, p]``: primary, clutch-output speeds, axle twist,
-secondary speed, valve stem position and speed, coil current, clutch pressure (SI, gauge).
+State ``y = [w_p, w_1, phi, w_s, x, v, I, p, I_m]``: primary, clutch-output speeds, axle twist,
+secondary speed, valve stem position and speed, coil current, clutch pressure (SI, gauge),
+magnetising current.
 
 * Coil: current controller (setpoint ``g_current u``) saturating at the supply voltage,
   freewheeling when it asks for a negative voltage.
-* Stem: ``m v' = k_F1 I + k_F2 I^2 + F_pre - A_fb p - c x - d v - friction``, Coulomb
+* Magnet: the magnetising current ``I_m`` follows ``I`` through a smoothed play of
+  half-width ``I_hyst`` (``dI_m/dt = dI/dt min(z, 1)^8``, ``z = (I - I_m) sign(dI/dt) / I_hyst``);
+  force ``k_F1 I_m + k_F2 I_m^2``, continued linearly above ``I_sat``.
+* Stem: ``m v' = F_mag(I_m) + F_pre - A_fb p - c x - d v - friction``, Coulomb
   friction by exact stick/slip (events: ``v = 0``, holding force beyond ``F_friction``).
 * Hydraulics: supply port in series with the laminar line, drain port, leakage, relief;
   aerated-oil compliance plus the piston stroking against its reset spring.
@@ -43,12 +47,12 @@ from wetclutch import clutch, oil
 from wetclutch.network import integrate
 from wetclutch.signals import Step
 
-W_P, W_1, PHI, W_S, X, V, I, P = range(8)
+W_P, W_1, PHI, W_S, X, V, I, P, IM = range(9)
 LOCKED, STUCK = 2, 3  # stem/brake held; CVT held at standstill (+-3: sign of the held torque)
 T_STEP, U0, U1 = 1.0, 0.2, 1.0  # input step, V
 ONSET = 0.2  # clutch torque defining the onset, N m
 DT_OUT = 1e-3  # output grid, s (as the engine's default)
-SCALE = np.array([100.0, 100.0, 1.0, 10.0, 1e-3, 1e-2, 1.0, 1e6])  # typical magnitudes of y
+SCALE = np.array([100.0, 100.0, 1.0, 10.0, 1e-3, 1e-2, 1.0, 1e6, 1.0])  # typical magnitudes of y
 
 
 class Rig:
@@ -93,10 +97,27 @@ def _dpdt(r, xs, p):
     return q / cap
 
 
+def _magnet(r, i_m):
+    """Magnet force at magnetising current ``i_m``: quadratic, continued linearly above ``I_sat``, N."""
+    i_s = r[A.I_SAT]
+    if i_m <= i_s:
+        return r[A.K_F1] * i_m + r[A.K_F2] * i_m * i_m
+    return r[A.K_F1] * i_s + r[A.K_F2] * i_s * i_s + (r[A.K_F1] + 2.0 * r[A.K_F2] * i_s) * (i_m - i_s)
+
+
+def _play(r, cur, cur_dot, i_m):
+    """dI_m/dt: the magnet's hysteresis, a smoothed play of half-width ``I_hyst`` on the current."""
+    if r[A.I_HYST] <= 0.0:
+        return cur_dot
+    z = (cur - i_m if cur_dot > 0.0 else i_m - cur) / r[A.I_HYST]
+    return cur_dot * min(z, 1.0) ** 8 if z > 0.0 else 0.0
+
+
 def _stem_force(m, y):
     """Magnet force + preload - pressure feedback - spring: what the friction must hold, N."""
-    r, cur = m.r, y[I]
-    return r[A.K_F1] * cur + r[A.K_F2] * cur * cur + r[A.F_PRE] - r[A.A_FB] * y[P] - m.c * y[X]
+    r = m.r
+    i_m = y[IM] if r[A.I_HYST] > 0.0 else y[I]
+    return _magnet(r, i_m) + r[A.F_PRE] - r[A.A_FB] * y[P] - m.c * y[X]
 
 
 def _clutch_torque(m, y, mode):
@@ -117,7 +138,7 @@ def _axle(m, y):
 
 def _rhs(t, y, m, modes, u):
     """Time derivative of ``y`` for fixed modes (clutch, brake, stem, CVT) and input ``u`` (V)."""
-    r, (mc, mb, ms, mg), dy = m.r, modes, [0.0] * 8
+    r, (mc, mb, ms, mg), dy = m.r, modes, [0.0] * 9
     i_ref = r[A.G_CURRENT] * u
     volt = r[A.R_COIL] * i_ref + r[A.K_AMP] * (i_ref - y[I])
     if volt > r[A.V_SUP]:
@@ -125,6 +146,7 @@ def _rhs(t, y, m, modes, u):
     elif volt < 0.0:
         volt = -r[A.R_FW] * y[I]  # the output transistor blocks: freewheel
     dy[I] = (volt - r[A.R_COIL] * y[I]) / r[A.L_COIL]
+    dy[IM] = _play(r, y[I], dy[I], y[IM])
     dy[P] = _dpdt(r, y[X], y[P])
     if ms != LOCKED:
         dy[X] = y[V]
@@ -223,7 +245,7 @@ def actuator_step_scipy(t_end: float = 5.0, method: str = "BDF", rtol: float = 1
     m = Rig()
     atol = 1e-3 * rtol * SCALE if atol is None else atol
     grid = np.union1d(np.linspace(0.0, t_end, int(round(t_end / DT_OUT)) + 1), [min(T_STEP, t_end)])
-    t, y = 0.0, np.array([m.w_p0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    t, y = 0.0, np.array([m.w_p0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     modes = (0, LOCKED, _stem_at_rest(m, y), _gear_at_rest(m, y, 0))  # clutch open, road load held
     onset, log, k, nfev, stalls, out = None, [], 0, 0, 0, []
     for t_b, u in ((min(T_STEP, t_end), U0), (t_end, U1)):

@@ -105,7 +105,7 @@ def test_feed_restriction_and_port_act_as_orifices_in_series():
     """Two equal turbulent orifices in series pass 1/sqrt(2) of one (no laminar line)."""
     p = wc.load_params(overrides={"hydraulics.line_length": 0.0})
     rec = clutch.actuator_record(p, 85.0)
-    nx = 12
+    nx = 13  # 8 mechanical + energy slots, then the actuator: I, p, V_in, V_out, I_m
     rec[A.STATE], rec[A.STEM_SPRING] = 8, 0
     x = np.zeros(nx)
     x[0] = 1.0  # stem far open: the port is fully uncovered

@@ -50,6 +50,7 @@ def actuator_record(params: Params, temp_C: float, config: str = "clutch") -> np
     r[A.V_SUP], r[A.R_COIL], r[A.L_COIL], r[A.R_FW] = v.V_supply, v.R_coil, v.L_coil, v.R_freewheel
     r[A.K_AMP], r[A.G_CURRENT] = v.amp_gain, v.g_current
     r[A.K_F1], r[A.K_F2], r[A.F_PRE], r[A.A_FB] = v.k_F1, v.k_F2, v.F_preload, v.A_fb
+    r[A.I_HYST], r[A.I_SAT] = v.I_hyst, v.I_sat
     r[A.OVERLAP], r[A.X_PORT], r[A.CDW] = v.overlap, v.x_port, v.C_d * v.port_width
     # Merritt's steady flow force, jet angle 69 degrees
     r[A.K_FLOW] = v.flow_force * 2.0 * v.C_d * v.port_width * np.cos(np.radians(69.0))
