@@ -18,7 +18,9 @@ magnetising current.
   force ``k_F1 I_m + k_F2 I_m^2``, continued linearly above ``I_sat``.
 * Stem: ``m v' = F_mag(I_m) + F_pre - A_fb p - c x - d v - friction``, Coulomb
   friction by exact stick/slip (events: ``v = 0``, holding force beyond ``F_friction``).
-* Hydraulics: supply port in series with the laminar line, drain port, leakage, relief;
+* Hydraulics: supply port (and the clutch's feed restriction) in series with the laminar
+  line, steady flow force on the stem, drain port, seal leakage (laminar gap in series
+  with an orifice), relief;
   aerated-oil compliance plus the piston stroking against its reset spring.
 * Driveline: clutch torque ``F_n F_n / (F_n + F_knee) mu(|slip|) sign(slip)`` with
   ``F_n = A_p (p - p_contact)``, oil drag ``b (w_p - w_1)``, CVT ``w_r = i w_1`` (massless
@@ -77,17 +79,34 @@ def _k_eff(p, k_oil, x0):
     return 1.0 / ((1.0 - x) / k_oil + x / (oil.KAPPA_AIR * p_abs))
 
 
-def _dpdt(r, xs, p):
-    """Pressure rate from the valve flows and the compliance of the clutch volume, Pa/s."""
+def _port_flows(r, xs, p):
+    """Openings of the supply and drain ports (m) and the flows through them (m^3/s)."""
     o_sup = min(max(xs - r[A.OVERLAP], 0.0), r[A.X_PORT])
     o_drn = min(max(-xs - r[A.OVERLAP], 0.0), r[A.X_PORT])
-    q = 0.0
-    if o_sup > 0.0:  # turbulent port in series with the laminar line: a^2 (dp - R q) = q^2
+    q_in = 0.0
+    if o_sup > 0.0:  # turbulent port (with the feed restriction in series) and the laminar line
         a = r[A.CDW] * o_sup * math.sqrt(2.0 / r[A.RHO])
+        if r[A.A_FEED] > 0.0:
+            a = a * r[A.A_FEED] / math.sqrt(a * a + r[A.A_FEED] ** 2)
         a2r = a * a * r[A.R_LINE]
         dp = r[A.P_SUP] - p
-        q = math.copysign(0.5 * (-a2r + math.sqrt(a2r * a2r + 4.0 * a * a * abs(dp))), dp)
-    q -= r[A.CDW] * o_drn * math.sqrt(2.0 * max(p, 0.0) / r[A.RHO]) + r[A.G_LEAK] * p
+        q_in = math.copysign(0.5 * (-a2r + math.sqrt(a2r * a2r + 4.0 * a * a * abs(dp))), dp)
+    q_drn = r[A.CDW] * o_drn * math.sqrt(2.0 * max(p, 0.0) / r[A.RHO])
+    return o_sup, o_drn, q_in, q_drn
+
+
+def _seal_leak(r, p):
+    """Laminar seal gap in series with a turbulent orifice: p = Q/G + (Q/K)^2, m^3/s."""
+    g, k = r[A.G_LEAK], r[A.K_SEAL]
+    if k <= 0.0 or p <= 0.0:
+        return g * p
+    return 2.0 * g * p / (1.0 + math.sqrt(1.0 + 4.0 * g * g * p / (k * k)))
+
+
+def _dpdt(r, xs, p):
+    """Pressure rate from the valve flows and the compliance of the clutch volume, Pa/s."""
+    _, _, q_in, q_drn = _port_flows(r, xs, p)
+    q = q_in - q_drn - _seal_leak(r, p) - r[A.K_RESTRICT] * math.sqrt(max(p, 0.0))
     if p > r[A.P_RELIEF]:
         q -= r[A.G_RELIEF] * (p - r[A.P_RELIEF])
     stroke = min(max(r[A.A_P] * (p - r[A.P_PRE]) / r[A.K_RESET], 0.0), r[A.X_CONTACT])  # piston travel
@@ -117,7 +136,10 @@ def _stem_force(m, y):
     """Magnet force + preload - pressure feedback - spring: what the friction must hold, N."""
     r = m.r
     i_m = y[IM] if r[A.I_HYST] > 0.0 else y[I]
-    return _magnet(r, i_m) + r[A.F_PRE] - r[A.A_FB] * y[P] - m.c * y[X]
+    o_sup, o_drn, q_in, _ = _port_flows(r, y[X], y[P])
+    dp_in = r[A.P_SUP] - y[P] - r[A.R_LINE] * q_in  # steady flow force: the jets pull the stem shut
+    f_flow = r[A.K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * max(y[P], 0.0))
+    return _magnet(r, i_m) + r[A.F_PRE] - r[A.A_FB] * y[P] - f_flow - m.c * y[X]
 
 
 def _clutch_torque(m, y, mode):

@@ -19,7 +19,8 @@ Chain of effects::
     F_flow = k_flow (opening x pressure drop across the port): the steady flow force
     x > overlap: supply -> clutch through the stem port, in series with the clutch installation's
                  feed restriction (turbulent) and feed line (laminar);
-    x < -overlap: clutch -> tank;  seal leakage (laminar);  relief above p_relief
+    x < -overlap: clutch -> tank;  relief above p_relief
+    seal leakage: a laminar gap in series with a turbulent orifice (the rings' joint gaps)
     dp/dt = (Q_in - Q_drain - Q_leak - Q_relief) / C(p)
     C(p) = V(p)/K_oil (+ A_p^2 / k_reset while the piston strokes)
     F_n = A_p (p - p_contact) after the plates touch
@@ -100,8 +101,9 @@ from .oil import _k_eff_j as effective_bulk_modulus
     F_KNEE,
     I_HYST,  # half-width of the magnet's hysteresis (play on the coil current), A; 0: none
     I_SAT,  # coil current above which the magnet force rises only linearly, A (inf: never)
+    K_SEAL,  # turbulent orifice in series with the laminar seal gap G_LEAK, m^3/(s Pa^0.5); 0: none
     N_ACT,
-) = range(42)
+) = range(43)
 
 DC, PWM = 0, 1
 
@@ -143,6 +145,21 @@ def play_rate(cur, cur_dot, i_m, r):
     z2 = z * z
     z4 = z2 * z2
     return cur_dot * z4 * z4
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def seal_leak(p, act):
+    """Seal leakage (m^3/s): the laminar gap ``G_LEAK`` in series with the turbulent orifice ``K_SEAL``.
+
+    ``p = Q / G + (Q / K)^2``; solved as ``Q = 2 G p / (1 + sqrt(1 + 4 G^2 p / K^2))``, which
+    stays accurate when either term dominates. Cold oil: the gap (1/viscosity) limits the
+    flow; warm oil: the orifice (no viscosity) does.
+    """
+    g = act[G_LEAK]
+    k = act[K_SEAL]
+    if k <= 0.0 or p <= 0.0:
+        return g * p
+    return 2.0 * g * p / (1.0 + np.sqrt(1.0 + 4.0 * g * g * p / (k * k)))
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
@@ -191,7 +208,7 @@ def evaluate(x, act, u, ext, dx):
         if dp < 0.0:
             q_in = -q_in
     q_drn = act[CDW] * o_drn * np.sqrt(2.0 * max(p, 0.0) / act[RHO])
-    q_leak = act[G_LEAK] * p + act[K_RESTRICT] * np.sqrt(max(p, 0.0))
+    q_leak = seal_leak(p, act) + act[K_RESTRICT] * np.sqrt(max(p, 0.0))
     q_rel = act[G_RELIEF] * (p - act[P_RELIEF]) if p > act[P_RELIEF] else 0.0
     # ---- oil volume behind the valve and the piston's compliance
     vol = act[V0] + act[A_P] * piston_position(p, act)

@@ -62,6 +62,7 @@ def actuator_record(params: Params, temp_C: float, config: str = "clutch") -> np
     r[A.V0] = h.V0
     r[A.K_OIL], r[A.AIR] = oil.bulk_modulus(temp_C, air_fraction=0.0), h.air_fraction
     r[A.G_LEAK] = h.leak_85C * oil.dynamic_viscosity(85.0) / mu
+    r[A.K_SEAL] = h.seal_orifice
     r[A.P_RELIEF], r[A.G_RELIEF] = h.p_relief, h.relief_conductance
     r[A.F_KNEE] = params.friction.F_knee
     if config == "clutch":
@@ -74,6 +75,7 @@ def actuator_record(params: Params, temp_C: float, config: str = "clutch") -> np
         r[A.A_P], r[A.K_RESET], r[A.X_CONTACT] = 0.0, 1.0, 0.0
         r[A.P_PRE] = r[A.P_CONTACT] = np.inf
         r[A.K_RESTRICT] = VALVE_TEST_FLOW / np.sqrt(h.p_supply)
+        r[A.G_LEAK] = r[A.K_SEAL] = 0.0  # no clutch, so no seal rings to leak
     return r
 
 
