@@ -12,7 +12,7 @@ Two configurations, as in the study:
     dead-end volume); there is no driveline. The valve sits on the test bench's
     pump directly: the clutch installation's feed line and feed restriction
     (``hydraulics.line_*``, ``hydraulics.feed_orifice``), which could not pass 32 l/min
-    at 8 bar, are not part of this test.
+    at 8 bar, are not part of this test, nor are the clutch's seal rings (no seal leakage).
 
 The oil temperature is a parameter of the experiment (``rig.oil_temp_C``); the
 oil's viscosity (supply line loss, leakage, open-clutch drag), density and bulk

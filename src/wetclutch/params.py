@@ -29,6 +29,29 @@ Default values and why (see also ``docs/parameters.md``):
   study calls the driveline's damping small and nonlinear (air drag).
 * ``b_1`` 2e-5 and ``b_2`` 5e-5 N m s^2: windage of a disc flywheel, about
   0.45 N m at 150 rad/s on the primary.
+
+Valve and hydraulics, calibrated together against the study's figures (spec 6; see
+:mod:`wetclutch.calibration` and ``docs/model.md``):
+
+* ``I_hyst`` 0.045 A: the magnet's hysteresis (a play on the coil current), about 3 % of
+  the 1.4 A the valve test reaches; the up and down staircases of the valve test then
+  differ by about 0.13 bar under 1 kHz PWM.
+* ``k_F1`` 4.649 N/A and ``F_preload`` 0.90 N (with ``k_F2`` 20.1 N/A^2): on the rising
+  branch, ``I_m = I - I_hyst``, the force equals the hysteresis-free fit of the study's
+  whole-clutch DC curve, ``2.84 I + 20.1 I^2`` + 0.74 N (``k_F1 = 2.84 + 2 k_F2 I_hyst``;
+  ``F_preload = 0.74 + 2.84 I_hyst + k_F2 I_hyst^2`` = 0.909 N, taken as 0.90 N: the
+  pdc 0.05 dead times hinge on this force, and 0.90 centres them between 41 and 85 C).
+* ``I_sat`` 0.49 A: beyond it the force rises linearly (saturated iron). The whole-clutch
+  curves stay below 0.8 A; the valve test's near-linear ``24 pdc - 1.38`` up to pdc 0.35
+  (1.4 A) needs it.
+* ``x_port`` 5 mm (the magnet's working stroke) and ``flow_force`` 0.6 (a partly
+  compensated spool): the droop of the valve under the valve test's 32 l/min.
+* ``feed_orifice`` 13.85 mm^2, ``line_length`` 1.45 m, ``x_contact`` 1.37 mm with
+  ``k_reset`` 1.784e5 N/m (contact still at 0.70 bar): the clutch fill, which sets the
+  dead times (0.1 s and 0.2 s at pdc 0.2, 85 and 41 C).
+* ``seal_orifice`` 0 (laminar seal leakage only): see the calibration report for why a
+  turbulent seal leak, which would give the cold end of the static pressure vs
+  temperature curve, is not used by default.
 """
 
 from __future__ import annotations
