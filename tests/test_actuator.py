@@ -177,3 +177,14 @@ def test_seal_leak_is_a_gap_in_series_with_an_orifice():
     assert A.seal_leak(p, rec) == pytest.approx(3e-8 * np.sqrt(p), rel=1e-4)
     rec[A.K_SEAL] = 0.0  # no orifice given: laminar only, as before
     assert A.seal_leak(p, rec) == 1e-3 * p
+
+
+def test_turbulent_seal_leak_makes_the_static_pressure_rise_with_temperature():
+    """With the seal rings' orifice the leak, lost in the viscous feed line, lowers the cold pressure most."""
+    p = wc.load_params(overrides={"hydraulics.leak_85C": 8e-10, "hydraulics.seal_orifice": 6.3e-8})
+    cold, warm = (calibration._settled(p, Step(1.0, 0.0, 0.2), True, "clutch", temp, 4.0) for temp in (20.0, 85.0))
+    assert warm - cold > 1.5e5
+    # the default (laminar seal gap only): the force balance, whatever the viscosity
+    d = wc.Params()
+    cold0, warm0 = (calibration._settled(d, Step(1.0, 0.0, 0.2), True, "clutch", temp, 4.0) for temp in (20.0, 85.0))
+    assert abs(warm0 - cold0) < 0.2e5

@@ -39,8 +39,8 @@ Valve and hydraulics, calibrated together against the study's figures (spec 6; s
 * ``k_F1`` 4.649 N/A and ``F_preload`` 0.90 N (with ``k_F2`` 20.1 N/A^2): on the rising
   branch, ``I_m = I - I_hyst``, the force equals the hysteresis-free fit of the study's
   whole-clutch DC curve, ``2.84 I + 20.1 I^2`` + 0.74 N (``k_F1 = 2.84 + 2 k_F2 I_hyst``;
-  ``F_preload = 0.74 + 2.84 I_hyst + k_F2 I_hyst^2`` = 0.909 N, taken as 0.90 N: the
-  pdc 0.05 dead times hinge on this force, and 0.90 centres them between 41 and 85 C).
+  ``F_preload = 0.74 + 2.84 I_hyst + k_F2 I_hyst^2`` = 0.909 N, rounded to 0.90 N; the
+  pdc 0.05 dead times hinge on this force, 0.01 N moves them by about 1 %).
 * ``I_sat`` 0.49 A: beyond it the force rises linearly (saturated iron). The whole-clutch
   curves stay below 0.8 A; the valve test's near-linear ``24 pdc - 1.38`` up to pdc 0.35
   (1.4 A) needs it.
