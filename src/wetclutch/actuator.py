@@ -6,8 +6,8 @@ flowed in through the valve and out (drain, leakage, relief), m^3, which close
 the oil volume balance, and the magnetising current ``I_m`` (A) that the
 magnet's iron follows through its hysteresis. The valve stem is a body of
 the network (mass ``m_stem``) on a spring-damper to the ground, with a Coulomb
-brake for the stem friction; so stem stick/slip, the source of the valve's
-hysteresis, is solved exactly by the engine like any clutch. The actuator pushes
+brake for the stem friction; so stem stick/slip (a small hysteresis in DC mode,
+dithered out by PWM) is solved exactly by the engine like any clutch. The actuator pushes
 on the stem with the magnet force minus the pressure feedback, and sets the
 normal force of the clutch.
 
@@ -100,7 +100,7 @@ from .oil import _k_eff_j as effective_bulk_modulus
     G_RELIEF,
     F_KNEE,
     I_HYST,  # half-width of the magnet's hysteresis (play on the coil current), A; 0: none
-    I_SAT,  # coil current above which the magnet force rises only linearly, A (inf: never)
+    I_SAT,  # coil current above which the magnet force rises only linearly, A
     K_SEAL,  # turbulent orifice in series with the laminar seal gap G_LEAK, m^3/(s Pa^0.5); 0: none
     N_ACT,
 ) = range(43)
