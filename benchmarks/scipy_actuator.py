@@ -7,14 +7,20 @@ step. Same equations and default parameters (oil at 85 C) as
 ``wetclutch.clutch.build(Params(), Step(1.0, 0.2, 1.0))``: the parameter values are
 read from :mod:`wetclutch`, the dynamics are written here.
 
-State ``y = [w_p, w_1, phi, w_s, x, v, I, p]``: primary, clutch-output speeds, axle twist,
-secondary speed, valve stem position and speed, coil current, clutch pressure (SI, gauge).
+State ``y = [w_p, w_1, phi, w_s, x, v, I, p, I_m]``: primary, clutch-output speeds, axle twist,
+secondary speed, valve stem position and speed, coil current, clutch pressure (SI, gauge),
+magnetising current.
 
 * Coil: current controller (setpoint ``g_current u``) saturating at the supply voltage,
   freewheeling when it asks for a negative voltage.
-* Stem: ``m v' = k_F1 I + k_F2 I^2 + F_pre - A_fb p - c x - d v - friction``, Coulomb
+* Magnet: the magnetising current ``I_m`` follows ``I`` through a smoothed play of
+  half-width ``I_hyst`` (``dI_m/dt = dI/dt min(z, 1)^8``, ``z = (I - I_m) sign(dI/dt) / I_hyst``);
+  force ``k_F1 I_m + k_F2 I_m^2``, continued linearly above ``I_sat``.
+* Stem: ``m v' = F_mag(I_m) + F_pre - A_fb p - c x - d v - friction``, Coulomb
   friction by exact stick/slip (events: ``v = 0``, holding force beyond ``F_friction``).
-* Hydraulics: supply port in series with the laminar line, drain port, leakage, relief;
+* Hydraulics: supply port (and the clutch's feed restriction) in series with the laminar
+  line, steady flow force on the stem, drain port, seal leakage (laminar gap in series
+  with an orifice), relief;
   aerated-oil compliance plus the piston stroking against its reset spring.
 * Driveline: clutch torque ``F_n F_n / (F_n + F_knee) mu(|slip|) sign(slip)`` with
   ``F_n = A_p (p - p_contact)``, oil drag ``b (w_p - w_1)``, CVT ``w_r = i w_1`` (massless
@@ -25,10 +31,9 @@ Simplifications (checked against the engine's event log of this run): the clutch
 from open to slipping (it never locks within 5 s) and the road-load brake only releases, so
 the reverse switches are not modelled; the energy and oil-volume bookkeeping is left out.
 
-Agreement with the engine (``__main__``): the same 47 events; pressure within 1 Pa at 1.2-5 s,
-torque onset within 2 us; tens of Pa at worst on the 1 ms grid, integration error of both
-sides (stem releases after a long stick are ill-conditioned; 34 MPa/s rise after contact):
-with engine rtol 1e-11 and LSODA rtol 1e-9 the traces agree within 0.2 Pa everywhere.
+Agreement with the engine (``__main__``): the same 31 events (19 stem stick/slip switches);
+pressure within 2 Pa at 1.2-5 s, torque onset within 7 us; about 100 Pa at worst on the
+1 ms grid, right after contact (a steep rise; integration error of both sides).
 """
 
 import math
@@ -43,12 +48,12 @@ from wetclutch import clutch, oil
 from wetclutch.network import integrate
 from wetclutch.signals import Step
 
-W_P, W_1, PHI, W_S, X, V, I, P = range(8)
+W_P, W_1, PHI, W_S, X, V, I, P, IM = range(9)
 LOCKED, STUCK = 2, 3  # stem/brake held; CVT held at standstill (+-3: sign of the held torque)
 T_STEP, U0, U1 = 1.0, 0.2, 1.0  # input step, V
 ONSET = 0.2  # clutch torque defining the onset, N m
 DT_OUT = 1e-3  # output grid, s (as the engine's default)
-SCALE = np.array([100.0, 100.0, 1.0, 10.0, 1e-3, 1e-2, 1.0, 1e6])  # typical magnitudes of y
+SCALE = np.array([100.0, 100.0, 1.0, 10.0, 1e-3, 1e-2, 1.0, 1e6, 1.0])  # typical magnitudes of y
 
 
 class Rig:
@@ -73,17 +78,34 @@ def _k_eff(p, k_oil, x0):
     return 1.0 / ((1.0 - x) / k_oil + x / (oil.KAPPA_AIR * p_abs))
 
 
-def _dpdt(r, xs, p):
-    """Pressure rate from the valve flows and the compliance of the clutch volume, Pa/s."""
+def _port_flows(r, xs, p):
+    """Openings of the supply and drain ports (m) and the flows through them (m^3/s)."""
     o_sup = min(max(xs - r[A.OVERLAP], 0.0), r[A.X_PORT])
     o_drn = min(max(-xs - r[A.OVERLAP], 0.0), r[A.X_PORT])
-    q = 0.0
-    if o_sup > 0.0:  # turbulent port in series with the laminar line: a^2 (dp - R q) = q^2
+    q_in = 0.0
+    if o_sup > 0.0:  # turbulent port (with the feed restriction in series) and the laminar line
         a = r[A.CDW] * o_sup * math.sqrt(2.0 / r[A.RHO])
+        if r[A.A_FEED] > 0.0:
+            a = a * r[A.A_FEED] / math.sqrt(a * a + r[A.A_FEED] ** 2)
         a2r = a * a * r[A.R_LINE]
         dp = r[A.P_SUP] - p
-        q = math.copysign(0.5 * (-a2r + math.sqrt(a2r * a2r + 4.0 * a * a * abs(dp))), dp)
-    q -= r[A.CDW] * o_drn * math.sqrt(2.0 * max(p, 0.0) / r[A.RHO]) + r[A.G_LEAK] * p
+        q_in = math.copysign(0.5 * (-a2r + math.sqrt(a2r * a2r + 4.0 * a * a * abs(dp))), dp)
+    q_drn = r[A.CDW] * o_drn * math.sqrt(2.0 * max(p, 0.0) / r[A.RHO])
+    return o_sup, o_drn, q_in, q_drn
+
+
+def _seal_leak(r, p):
+    """Laminar seal gap in series with a turbulent orifice: p = Q/G + (Q/K)^2, m^3/s."""
+    g, k = r[A.G_LEAK], r[A.K_SEAL]
+    if k <= 0.0 or p <= 0.0:
+        return g * p
+    return 2.0 * g * p / (1.0 + math.sqrt(1.0 + 4.0 * g * g * p / (k * k)))
+
+
+def _dpdt(r, xs, p):
+    """Pressure rate from the valve flows and the compliance of the clutch volume, Pa/s."""
+    _, _, q_in, q_drn = _port_flows(r, xs, p)
+    q = q_in - q_drn - _seal_leak(r, p) - r[A.K_RESTRICT] * math.sqrt(max(p, 0.0))
     if p > r[A.P_RELIEF]:
         q -= r[A.G_RELIEF] * (p - r[A.P_RELIEF])
     stroke = min(max(r[A.A_P] * (p - r[A.P_PRE]) / r[A.K_RESET], 0.0), r[A.X_CONTACT])  # piston travel
@@ -93,10 +115,30 @@ def _dpdt(r, xs, p):
     return q / cap
 
 
+def _magnet(r, i_m):
+    """Magnet force at magnetising current ``i_m``: quadratic, continued linearly above ``I_sat``, N."""
+    i_s = r[A.I_SAT]
+    if i_m <= i_s:
+        return r[A.K_F1] * i_m + r[A.K_F2] * i_m * i_m
+    return r[A.K_F1] * i_s + r[A.K_F2] * i_s * i_s + (r[A.K_F1] + 2.0 * r[A.K_F2] * i_s) * (i_m - i_s)
+
+
+def _play(r, cur, cur_dot, i_m):
+    """dI_m/dt: the magnet's hysteresis, a smoothed play of half-width ``I_hyst`` on the current."""
+    if r[A.I_HYST] <= 0.0:
+        return cur_dot
+    z = (cur - i_m if cur_dot > 0.0 else i_m - cur) / r[A.I_HYST]
+    return cur_dot * min(z, 1.0) ** 8 if z > 0.0 else 0.0
+
+
 def _stem_force(m, y):
     """Magnet force + preload - pressure feedback - spring: what the friction must hold, N."""
-    r, cur = m.r, y[I]
-    return r[A.K_F1] * cur + r[A.K_F2] * cur * cur + r[A.F_PRE] - r[A.A_FB] * y[P] - m.c * y[X]
+    r = m.r
+    i_m = y[IM] if r[A.I_HYST] > 0.0 else y[I]
+    o_sup, o_drn, q_in, _ = _port_flows(r, y[X], y[P])
+    dp_in = r[A.P_SUP] - y[P] - r[A.R_LINE] * q_in  # steady flow force: the jets pull the stem shut
+    f_flow = r[A.K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * max(y[P], 0.0))
+    return _magnet(r, i_m) + r[A.F_PRE] - r[A.A_FB] * y[P] - f_flow - m.c * y[X]
 
 
 def _clutch_torque(m, y, mode):
@@ -117,7 +159,7 @@ def _axle(m, y):
 
 def _rhs(t, y, m, modes, u):
     """Time derivative of ``y`` for fixed modes (clutch, brake, stem, CVT) and input ``u`` (V)."""
-    r, (mc, mb, ms, mg), dy = m.r, modes, [0.0] * 8
+    r, (mc, mb, ms, mg), dy = m.r, modes, [0.0] * 9
     i_ref = r[A.G_CURRENT] * u
     volt = r[A.R_COIL] * i_ref + r[A.K_AMP] * (i_ref - y[I])
     if volt > r[A.V_SUP]:
@@ -125,6 +167,7 @@ def _rhs(t, y, m, modes, u):
     elif volt < 0.0:
         volt = -r[A.R_FW] * y[I]  # the output transistor blocks: freewheel
     dy[I] = (volt - r[A.R_COIL] * y[I]) / r[A.L_COIL]
+    dy[IM] = _play(r, y[I], dy[I], y[IM])
     dy[P] = _dpdt(r, y[X], y[P])
     if ms != LOCKED:
         dy[X] = y[V]
@@ -223,7 +266,7 @@ def actuator_step_scipy(t_end: float = 5.0, method: str = "BDF", rtol: float = 1
     m = Rig()
     atol = 1e-3 * rtol * SCALE if atol is None else atol
     grid = np.union1d(np.linspace(0.0, t_end, int(round(t_end / DT_OUT)) + 1), [min(T_STEP, t_end)])
-    t, y = 0.0, np.array([m.w_p0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    t, y = 0.0, np.array([m.w_p0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     modes = (0, LOCKED, _stem_at_rest(m, y), _gear_at_rest(m, y, 0))  # clutch open, road load held
     onset, log, k, nfev, stalls, out = None, [], 0, 0, 0, []
     for t_b, u in ((min(T_STEP, t_end), U0), (t_end, U1)):

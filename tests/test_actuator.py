@@ -10,7 +10,7 @@ import wetclutch as wc
 from wetclutch import actuator as A
 from wetclutch import calibration, clutch, oil, rig
 from wetclutch.network import integrate
-from wetclutch.signals import Step
+from wetclutch.signals import Step, Table
 
 
 @pytest.fixture(scope="module")
@@ -21,7 +21,10 @@ def pwm_step():
 def test_fill_phases_in_order(pwm_step):
     t = pwm_step.truth
     h = wc.Params().hydraulics
-    moving = t.time[t.x_piston > 0].iloc[0]
+    # the first second settles the start from an all-zero state (its inrush may just touch the
+    # prestress); at the step the piston must be back at its stop
+    assert t.x_piston[t.time < rig.T_STEP].iloc[-1] == 0.0
+    moving = t.time[(t.time >= rig.T_STEP) & (t.x_piston > 0)].iloc[0]
     contact = t.time[t.x_piston >= h.x_contact * (1 - 1e-9)].iloc[0]
     torque = t.time[t.T_c.abs() > 0.2].iloc[0]
     assert rig.T_STEP < moving < contact <= torque
@@ -86,10 +89,11 @@ def test_colder_oil_fills_slower():
 
 
 def test_study_figures_that_the_default_meets():
-    """The study's dead times, contact pressure and DC static curve (spec section 6)."""
+    """The study's dead times, contact pressure, DC static curve, valve test and hysteresis (spec section 6)."""
     figs = {f.name: f for f in calibration.run()}
     for name, f in figs.items():
-        if name.startswith(("dead time", "contact pressure", "whole clutch static p vs DC", "driveline resonance")):
+        if name.startswith(("dead time", "contact pressure", "whole clutch static p vs DC", "driveline resonance",
+                            "valve alone", "valve hysteresis")):
             assert f.passed, (name, f.simulated, f.error)
 
 
@@ -105,12 +109,13 @@ def test_feed_restriction_and_port_act_as_orifices_in_series():
     """Two equal turbulent orifices in series pass 1/sqrt(2) of one (no laminar line)."""
     p = wc.load_params(overrides={"hydraulics.line_length": 0.0})
     rec = clutch.actuator_record(p, 85.0)
-    nx = 12
+    nx = 13  # the actuator's five states (I, p, V_in, V_out, I_m) at 8..12
     rec[A.STATE], rec[A.STEM_SPRING] = 8, 0
     x = np.zeros(nx)
     x[0] = 1.0  # stem far open: the port is fully uncovered
     ext = np.zeros(1)
     dx_one, dx_two = np.zeros(nx), np.zeros(nx)
+    rec[A.A_FEED] = 0.0  # the port alone first
     A.evaluate(x, rec, 0.0, ext, dx_one)
     rec[A.A_FEED] = rec[A.CDW] * rec[A.X_PORT] * np.sqrt(2.0 / rec[A.RHO])  # the same area as the port
     A.evaluate(x, rec, 0.0, ext, dx_two)
@@ -121,3 +126,65 @@ def test_flow_force_lowers_the_valve_test_pressure():
     base = calibration.staircase(wc.Params(), np.array([0.1]))[0][0]
     ff = calibration.staircase(wc.load_params(overrides={"valve.flow_force": 1.0}), np.array([0.1]))[0][0]
     assert ff < base - 0.1e5
+
+
+def test_magnet_force_continues_linearly_above_saturation():
+    """Quadratic below ``I_sat``; above it a straight line with the slope it had there (C1)."""
+    rec = clutch.actuator_record(wc.load_params(overrides={"valve.I_sat": 0.5}), 85.0)
+
+    def f(i):
+        return A.magnet_force(i, rec)
+
+    assert f(0.3) == pytest.approx(rec[A.K_F1] * 0.3 + rec[A.K_F2] * 0.09, rel=1e-12)
+    h = 1e-6
+    assert (f(0.5 + h) - f(0.5)) == pytest.approx(f(0.5) - f(0.5 - h), rel=1e-4)
+    assert f(1.2) - f(1.0) == pytest.approx(f(1.0) - f(0.8), rel=1e-9)
+    assert f(1.4) < rec[A.K_F1] * 1.4 + rec[A.K_F2] * 1.4**2 - 5.0  # well below the quadratic
+
+
+def test_magnetising_current_lags_by_the_play():
+    """DC ramp up then down: I_m trails I by +I_hyst rising, -I_hyst falling, and stays put in between."""
+    p = wc.load_params(overrides={"valve.I_hyst": 0.05})
+    u = Table([0.0, 0.5, 2.5, 3.0, 5.0, 6.0], [0.0, 0.0, 4.0, 4.0, 1.0, 1.0], kinks_are_breakpoints=True)
+    rn = clutch.build(p, u, config="valve-only")
+    tr = integrate(rn.network, 6.0, dt_out=1e-3)
+    cur, i_m = tr.x[:, rn.i_current], tr.x[:, rn.i_current + 4]
+    rising, falling = (tr.t > 1.5) & (tr.t < 2.4), (tr.t > 4.0) & (tr.t < 4.9)
+    assert np.allclose(cur[rising] - i_m[rising], 0.05, rtol=0.05)
+    assert np.allclose(cur[falling] - i_m[falling], -0.05, rtol=0.05)
+    hold = tr.t > 5.5  # the current has settled: the iron keeps its (down-branch) magnetisation
+    assert np.ptp(i_m[hold]) < 1e-6 and np.mean(i_m[hold] - cur[hold]) == pytest.approx(0.05, rel=0.05)
+
+
+def test_valve_staircase_shows_the_magnetic_hysteresis_under_pwm():
+    """Up and down staircases differ visibly (the PWM ripple does not dither the play out); none without it."""
+    d = np.array([0.1, 0.2, 0.3])  # the top step is the turning point: compare the two below it
+    up, down = calibration.staircase(wc.Params(), d)
+    assert np.all(down[:2] - up[:2] > 0.05e5)
+    up0, down0 = calibration.staircase(wc.load_params(overrides={"valve.I_hyst": 0.0}), d)
+    assert np.all(np.abs(down0 - up0) < 0.01e5)
+
+
+def test_seal_leak_is_a_gap_in_series_with_an_orifice():
+    rec = clutch.actuator_record(wc.Params(), 85.0)
+    p = 4e5
+    rec[A.G_LEAK], rec[A.K_SEAL] = 1e-10, 3e-8
+    q = A.seal_leak(p, rec)
+    assert q / rec[A.G_LEAK] + (q / rec[A.K_SEAL]) ** 2 == pytest.approx(p, rel=1e-12)
+    rec[A.K_SEAL] = 1e-3  # orifice wide open: the laminar gap alone
+    assert A.seal_leak(p, rec) == pytest.approx(1e-10 * p, rel=1e-6)
+    rec[A.G_LEAK], rec[A.K_SEAL] = 1e-3, 3e-8  # gap wide open: the orifice alone
+    assert A.seal_leak(p, rec) == pytest.approx(3e-8 * np.sqrt(p), rel=1e-4)
+    rec[A.K_SEAL] = 0.0  # no orifice given: laminar only, as before
+    assert A.seal_leak(p, rec) == 1e-3 * p
+
+
+def test_turbulent_seal_leak_makes_the_static_pressure_rise_with_temperature():
+    """With the seal rings' orifice the leak, lost in the viscous feed line, lowers the cold pressure most."""
+    p = wc.load_params(overrides={"hydraulics.leak_85C": 8e-10, "hydraulics.seal_orifice": 6.3e-8})
+    cold, warm = (calibration._settled(p, Step(1.0, 0.0, 0.2), True, "clutch", temp, 4.0) for temp in (20.0, 85.0))
+    assert warm - cold > 1.5e5
+    # the default (laminar seal gap only): the force balance, whatever the viscosity
+    d = wc.Params()
+    cold0, warm0 = (calibration._settled(d, Step(1.0, 0.0, 0.2), True, "clutch", temp, 4.0) for temp in (20.0, 85.0))
+    assert abs(warm0 - cold0) < 0.2e5

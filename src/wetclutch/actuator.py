@@ -1,23 +1,26 @@
 """The clutch actuator: valve electronics and coil, magnet, hydraulics, piston (spec 3-5).
 
-The actuator adds four states to the engine's state vector: the coil current
-``I`` (A), the clutch pressure ``p`` (Pa, gauge), and the oil volumes that have
+The actuator adds five states to the engine's state vector: the coil current
+``I`` (A), the clutch pressure ``p`` (Pa, gauge), the oil volumes that have
 flowed in through the valve and out (drain, leakage, relief), m^3, which close
-the oil volume balance. The valve stem is a body of
+the oil volume balance, and the magnetising current ``I_m`` (A) that the
+magnet's iron follows through its hysteresis. The valve stem is a body of
 the network (mass ``m_stem``) on a spring-damper to the ground, with a Coulomb
-brake for the stem friction; so stem stick/slip, the source of the valve's
-hysteresis, is solved exactly by the engine like any clutch. The actuator pushes
+brake for the stem friction; so stem stick/slip (a small hysteresis in DC mode,
+dithered out by PWM) is solved exactly by the engine like any clutch. The actuator pushes
 on the stem with the magnet force minus the pressure feedback, and sets the
 normal force of the clutch.
 
 Chain of effects::
 
-    u (V or duty) -> amplifier / PWM -> coil (L, R) -> I -> F_mag(I) = k_F1 I + k_F2 I^2
+    u (V or duty) -> amplifier / PWM -> coil (L, R) -> I -> play (hysteresis) -> I_m
+    F_mag(I_m) = k_F1 I_m + k_F2 I_m^2 up to I_sat, then rising linearly (saturated iron)
     stem: m x'' = F_mag + F_preload - A_fb p - F_flow - c x - d x' - friction
     F_flow = k_flow (opening x pressure drop across the port): the steady flow force
     x > overlap: supply -> clutch through the stem port, in series with the clutch installation's
                  feed restriction (turbulent) and feed line (laminar);
-    x < -overlap: clutch -> tank;  seal leakage (laminar);  relief above p_relief
+    x < -overlap: clutch -> tank;  relief above p_relief
+    seal leakage: a laminar gap in series with a turbulent orifice (the rings' joint gaps)
     dp/dt = (Q_in - Q_drain - Q_leak - Q_relief) / C(p)
     C(p) = V(p)/K_oil (+ A_p^2 / k_reset while the piston strokes)
     F_n = A_p (p - p_contact) after the plates touch
@@ -29,6 +32,20 @@ transistor blocks and the current decays through the freewheel circuit with
 ``L/(R + R_freewheel)``. In PWM mode the coil sees the supply voltage during the
 high part of each period and freewheels through a diode during the low part, so
 the mean current is about ``duty * V_supply / R_coil``.
+
+Magnet (spec 5: "friction of the magnet causes hysteresis", and "no simple model
+known" for the force): the force follows the magnetisation of the iron, which lags
+the coil current by a play (backlash, Prandtl) of half-width ``I_hyst``: ``I_m``
+stays put while ``|I - I_m| < I_hyst`` and is dragged along at that distance
+beyond. The play is smoothed as a Duhem model, ``dI_m/dt = dI/dt * min(z, 1)^8`` with
+``z = (I - I_m) sign(dI/dt) / I_hyst`` (0 when negative), so it needs no events; the
+steep power keeps ``I_m`` nearly still inside the play, and the lag settles at
+``I_hyst`` while the current keeps moving one way. A PWM ripple smaller than the
+play wears the lag down only slowly (the iron sees minor loops), so unlike the
+stem's Coulomb friction, which the ripple dithers out, this hysteresis stays
+visible in PWM mode. Above ``I_sat`` the iron saturates: the force keeps the slope it
+had there (``F`` grows like the ampere-turns, not their square), which the valve test
+(up to 1.4 A) sees and the whole-clutch curves (at most 0.8 A) hardly do.
 
 This module holds the flat parameter layout and the compiled kernel; the engine
 calls :func:`evaluate` from its right-hand side.
@@ -82,8 +99,11 @@ from .oil import _k_eff_j as effective_bulk_modulus
     P_RELIEF,
     G_RELIEF,
     F_KNEE,
+    I_HYST,  # half-width of the magnet's hysteresis (play on the coil current), A; 0: none
+    I_SAT,  # coil current above which the magnet force rises only linearly, A
+    K_SEAL,  # turbulent orifice in series with the laminar seal gap G_LEAK, m^3/(s Pa^0.5); 0: none
     N_ACT,
-) = range(40)
+) = range(43)
 
 DC, PWM = 0, 1
 
@@ -102,6 +122,44 @@ def piston_position(p, act):
 def normal_force(p, act):
     """Plate normal force (N), zero until the plates touch."""
     return act[A_P] * (p - act[P_CONTACT]) if p > act[P_CONTACT] else 0.0
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def magnet_force(i_m, act):
+    """Magnet force (N) at magnetising current ``i_m``: quadratic, then linear beyond ``I_SAT`` (C1)."""
+    i_s = act[I_SAT]
+    if i_m <= i_s:
+        return act[K_F1] * i_m + act[K_F2] * i_m * i_m
+    return act[K_F1] * i_s + act[K_F2] * i_s * i_s + (act[K_F1] + 2.0 * act[K_F2] * i_s) * (i_m - i_s)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def play_rate(cur, cur_dot, i_m, r):
+    """dI_m/dt of the smoothed play (Duhem form, see the module docstring) of half-width ``r`` > 0."""
+    z = (cur - i_m) / r if cur_dot > 0.0 else (i_m - cur) / r
+    if z <= 0.0:
+        return 0.0
+    # I_m never outruns I: capping keeps the rate bounded even where a trial stage of the
+    # explicit integrator overshoots the play (an uncapped z^8 runs away there)
+    z = min(z, 1.0)
+    z2 = z * z
+    z4 = z2 * z2
+    return cur_dot * z4 * z4
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def seal_leak(p, act):
+    """Seal leakage (m^3/s): the laminar gap ``G_LEAK`` in series with the turbulent orifice ``K_SEAL``.
+
+    ``p = Q / G + (Q / K)^2``; solved as ``Q = 2 G p / (1 + sqrt(1 + 4 G^2 p / K^2))``, which
+    stays accurate when either term dominates. Cold oil: the gap (1/viscosity) limits the
+    flow; warm oil: the orifice (no viscosity) does.
+    """
+    g = act[G_LEAK]
+    k = act[K_SEAL]
+    if k <= 0.0 or p <= 0.0:
+        return g * p
+    return 2.0 * g * p / (1.0 + np.sqrt(1.0 + 4.0 * g * g * p / (k * k)))
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
@@ -124,7 +182,15 @@ def evaluate(x, act, u, ext, dx):
             v = act[V_SUP]
         elif v < 0.0:
             v = -act[R_FW] * cur  # output transistor blocks: freewheel
-    dx[i0] = (v - act[R_COIL] * cur) / act[L_COIL]
+    cur_dot = (v - act[R_COIL] * cur) / act[L_COIL]
+    dx[i0] = cur_dot
+    # ---- magnetisation: a play on the current (hysteresis); none: I_m tracks I exactly
+    if act[I_HYST] > 0.0:
+        i_m = x[i0 + 4]
+        dx[i0 + 4] = play_rate(cur, cur_dot, i_m, act[I_HYST])
+    else:
+        i_m = cur
+        dx[i0 + 4] = cur_dot
     # ---- valve flows
     xs = x[int(act[STEM_SPRING])]
     o_sup = min(max(xs - act[OVERLAP], 0.0), act[X_PORT])
@@ -142,7 +208,7 @@ def evaluate(x, act, u, ext, dx):
         if dp < 0.0:
             q_in = -q_in
     q_drn = act[CDW] * o_drn * np.sqrt(2.0 * max(p, 0.0) / act[RHO])
-    q_leak = act[G_LEAK] * p + act[K_RESTRICT] * np.sqrt(max(p, 0.0))
+    q_leak = seal_leak(p, act) + act[K_RESTRICT] * np.sqrt(max(p, 0.0))
     q_rel = act[G_RELIEF] * (p - act[P_RELIEF]) if p > act[P_RELIEF] else 0.0
     # ---- oil volume behind the valve and the piston's compliance
     vol = act[V0] + act[A_P] * piston_position(p, act)
@@ -152,7 +218,7 @@ def evaluate(x, act, u, ext, dx):
     dx[i0 + 1] = (q_in - q_drn - q_leak - q_rel) / cap
     dx[i0 + 2] = q_in
     dx[i0 + 3] = q_drn + q_leak + q_rel
-    f_mag = act[K_F1] * cur + act[K_F2] * cur * cur
+    f_mag = magnet_force(i_m, act)
     # steady flow (Bernoulli) force: the jet through an open port pulls the stem towards closing
     dp_in = act[P_SUP] - p - act[R_LINE] * q_in
     f_flow = act[K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * max(p, 0.0))
@@ -169,4 +235,4 @@ def friction_factor(f_n, act):
     return f_n / (f_n + act[F_KNEE]) if act[F_KNEE] > 0.0 else 1.0
 
 
-N_STATES = 4  # I, p, V_in, V_out
+N_STATES = 5  # I, p, V_in, V_out, I_m

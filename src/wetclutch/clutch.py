@@ -12,7 +12,7 @@ Two configurations, as in the study:
     dead-end volume); there is no driveline. The valve sits on the test bench's
     pump directly: the clutch installation's feed line and feed restriction
     (``hydraulics.line_*``, ``hydraulics.feed_orifice``), which could not pass 32 l/min
-    at 8 bar, are not part of this test.
+    at 8 bar, are not part of this test, nor are the clutch's seal rings (no seal leakage).
 
 The oil temperature is a parameter of the experiment (``rig.oil_temp_C``); the
 oil's viscosity (supply line loss, leakage, open-clutch drag), density and bulk
@@ -50,6 +50,7 @@ def actuator_record(params: Params, temp_C: float, config: str = "clutch") -> np
     r[A.V_SUP], r[A.R_COIL], r[A.L_COIL], r[A.R_FW] = v.V_supply, v.R_coil, v.L_coil, v.R_freewheel
     r[A.K_AMP], r[A.G_CURRENT] = v.amp_gain, v.g_current
     r[A.K_F1], r[A.K_F2], r[A.F_PRE], r[A.A_FB] = v.k_F1, v.k_F2, v.F_preload, v.A_fb
+    r[A.I_HYST], r[A.I_SAT] = v.I_hyst, v.I_sat
     r[A.OVERLAP], r[A.X_PORT], r[A.CDW] = v.overlap, v.x_port, v.C_d * v.port_width
     # Merritt's steady flow force, jet angle 69 degrees
     r[A.K_FLOW] = v.flow_force * 2.0 * v.C_d * v.port_width * np.cos(np.radians(69.0))
@@ -61,6 +62,7 @@ def actuator_record(params: Params, temp_C: float, config: str = "clutch") -> np
     r[A.V0] = h.V0
     r[A.K_OIL], r[A.AIR] = oil.bulk_modulus(temp_C, air_fraction=0.0), h.air_fraction
     r[A.G_LEAK] = h.leak_85C * oil.dynamic_viscosity(85.0) / mu
+    r[A.K_SEAL] = h.seal_orifice
     r[A.P_RELIEF], r[A.G_RELIEF] = h.p_relief, h.relief_conductance
     r[A.F_KNEE] = params.friction.F_knee
     if config == "clutch":
@@ -73,6 +75,7 @@ def actuator_record(params: Params, temp_C: float, config: str = "clutch") -> np
         r[A.A_P], r[A.K_RESET], r[A.X_CONTACT] = 0.0, 1.0, 0.0
         r[A.P_PRE] = r[A.P_CONTACT] = np.inf
         r[A.K_RESTRICT] = VALVE_TEST_FLOW / np.sqrt(h.p_supply)
+        r[A.G_LEAK] = r[A.K_SEAL] = 0.0  # no clutch, so no seal rings to leak
     return r
 
 
