@@ -71,14 +71,14 @@ KIND, DT, U_MIN, U_MAX = range(4)
 LAUNCH, PI = 0, 1
 # launch controller
 (P_KISS, HOLD_OFFSET, FILL_EXIT, A_P, RATIO, ETA, MU2, MU1, MU0, F_KNEE, KP_P, KI_P, KP_T, KI_T, P_MAX, TAU_REF,
- HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, FF_T0, FF_DT, FF_NT, FF_P0, FF_DP, FF_NP) = range(4, 31)
-FF_TABLE = 31  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
+ HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, FF_T0, FF_DT, FF_NT, FF_P0, FF_DP, FF_NP) = range(4, 34)
+FF_TABLE = 34  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
 # PI baseline (shares the slots after the common fields)
 KP_B, KI_B = 4, 5
 
 # --- controller state
-CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K = range(8)
-N_CS = 8
+CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP = range(9)
+N_CS = 10
 FILL, HOLD, TORQUE, LOCKUP = 0, 1, 2, 3
 SYNC_SLIP = 2.0  # rad/s: measured slip below which the clutch counts as synchronised
 
@@ -132,6 +132,16 @@ def _launch(ctrl, cs, meas, t_ref):
         # reaching the plates with the valve wide open would jolt the pressure up
         phase = HOLD
         cs[CS_PSET] = p
+        cs[CS_DIP] = ctrl[DIP_N]
+    if phase == HOLD and cs[CS_DIP] > 0.0:
+        # after the full-input fill the magnet sits on the descending branch of its
+        # hysteresis and would hold the valve open; a short dip of the input brings it
+        # onto the rising branch, which the feedforward map describes
+        cs[CS_DIP] -= 1.0
+        cs[CS_PHASE] = phase
+        u = max(_table(ctrl, temp, p_hold) - ctrl[DIP], ctrl[U_MIN])
+        cs[CS_U] = u
+        return u
     if phase == HOLD and t_ref > 0.0:
         phase = TORQUE
         cs[CS_REF] = 0.0
@@ -171,7 +181,10 @@ def _launch(ctrl, cs, meas, t_ref):
         if not wind_up:
             cs[CS_ZT] += ctrl[KI_T] * sens * e_t * dt
     e_p = p_set - p
-    u = _table(ctrl, temp, p_set) + cs[CS_ZP] + ctrl[KP_P] * e_p
+    # in the hold the plates have just touched; an overshoot there would leave the
+    # stem in its overlap with the pressure trapped high, so push back harder
+    kp = ctrl[KP_HOLD] if phase == HOLD else ctrl[KP_P]
+    u = _table(ctrl, temp, p_set) + cs[CS_ZP] + kp * e_p
     if u > ctrl[U_MAX]:
         u = ctrl[U_MAX]
         if e_p < 0.0:
@@ -226,6 +239,11 @@ class LaunchGains:
         Rate at which the pressure set point then approaches the hold pressure, Pa/s.
     kp_p, ki_p : float
         Pressure PI: V/Pa and V/(Pa s).
+    kp_hold : float
+        Proportional pressure gain while holding at the kiss point, V/Pa.
+    dip, dip_time : float
+        After the fill, the input drops this far (V) below the hold input for
+        this long (s), to bring the magnet onto its rising hysteresis branch.
     kp_t, ki_t : float
         Torque loop on the pressure target: proportional (-) and integral (1/s)
         gains on the torque error, scaled by the nominal pressure per N m.
@@ -252,6 +270,9 @@ class LaunchGains:
     tau_theta: float = 0.01
     theta0: float = 1.2
     dither_amp: float = 0.05
+    kp_hold: float = 0.05e-5
+    dip: float = 0.5
+    dip_time: float = 0.015
     dither_hz: float = 125.0
 
 
