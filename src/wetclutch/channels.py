@@ -250,7 +250,7 @@ def detect_experiment(t: np.ndarray, u: np.ndarray, where: str = "") -> str:
         events = starts[np.concatenate([[True], np.diff(times) > 0.02])]
     else:
         events = starts
-    if 0 < events.size <= 50 and np.count_nonzero(jump) <= 5 * events.size:
+    if 0 < events.size <= 50 and np.count_nonzero(np.abs(du) > 0.005 * span) <= 10 * events.size:
         if events.size == 1:
             return "step" if du[events[0]:events[0] + 5].sum() > 0 else "relaxation"
         return "staircase"

@@ -615,12 +615,12 @@ def resonance(rec: Recording, slip_tol: float = 2.0, min_window: float = 0.8) ->
     moving = np.flatnonzero(slip >= slip_tol)
     if moving.size == 0 or moving[-1] + 1 >= t.size:
         return None
-    t_sync = t[moving[-1] + 1]
-    w = t >= t_sync + 0.1
-    if t[-1] - t_sync - 0.1 < min_window:
+    # windows by sample count, not by comparing times: rounding of the time stamps must not move them
+    start = moving[-1] + 1 + int(round(0.1 / rec.dt))
+    if start >= t.size or t[-1] - t[start] < min_window:
         return None
     stride = max(1, int(round(0.004 / rec.dt)))
-    tt, yy = t[w][::stride], d["T_r"][w][::stride]
+    tt, yy = t[start::stride], d["T_r"][start::stride]
     tau = tt - tt[0]
     f0 = ring_frequency(tt, yy - np.polyval(np.polyfit(tau, yy, 1), tau))
     if not np.isfinite(f0) or f0 <= 0:
