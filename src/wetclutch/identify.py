@@ -443,8 +443,8 @@ class StepModel:
 def step_models(rec: Recording, orders: Sequence[int] | None = None) -> list[StepModel]:
     """Fit first and second order plus dead time (and third order for the valve alone) to a step or relaxation.
 
-    The window runs from the command change to the end of the record (at most 4 s),
-    decimated to at most 400 points; the fit is nonlinear least squares on the
+    The window runs from the command change until 0.5 s after the response's rise
+    (at most 4 s); the fit is nonlinear least squares on the
     pressure change, and the standard errors come from its Jacobian.
     """
     if rec.experiment not in ("step", "relaxation"):
@@ -459,11 +459,18 @@ def step_models(rec: Recording, orders: Sequence[int] | None = None) -> list[Ste
     if np.count_nonzero(pre) < 10 or end - k < 50:
         return []
     p0, u0, u1 = float(np.median(p[pre][-200:])), float(np.median(u[pre])), float(np.median(u[k:end]))
-    stride = max(1, (end - k) // 400)
-    tt, yy = t[k:end:stride] - t[k], p[k:end:stride] - p0
+    tt, yy = t[k:end] - t[k], p[k:end] - p0
     du = u1 - u0
-    y_end = float(np.median(p[end - (end - k) // 5:end]) - p0)
+    y_end = float(np.median(yy[-(end - k) // 5:]))
     orders = orders or ((1, 2) if rec.config == "clutch" else (1, 2, 3))
+    # start values from the data, as for a first-order lag: t(f) = theta + tau ln(1 / (1 - f)) at 30 % and 80 %
+    reach = lambda f: float(tt[np.argmax(np.abs(yy) > f * abs(y_end))]) if abs(y_end) > 0 else 0.0  # noqa: E731
+    tau0 = float(np.clip((reach(0.8) - reach(0.3)) / np.log(0.7 / 0.2), 2e-3, 5.0))
+    theta0 = max(reach(0.3) - tau0 * np.log(1 / 0.7), 0.0)
+    # the rise and its settling at full rate: on a coarser grid the cost would be flat between dead times
+    span = tt < theta0 + 10.0 * tau0 + 0.5
+    stride = max(1, int(np.count_nonzero(span)) // 400)
+    tt, yy = tt[span][::stride], yy[span][::stride]
     out = []
     for order in orders:
         def model(x: np.ndarray) -> np.ndarray:
@@ -473,18 +480,21 @@ def step_models(rec: Recording, orders: Sequence[int] | None = None) -> list[Ste
             y[on] = x[0] * _step_poles(_poles(order, x[2:]), s[on])
             return y
 
-        tau0 = 0.05
-        x0 = {1: [tau0], 2: [2 * np.pi * 3.0, 0.7], 3: [0.02, 2 * np.pi * 5.0, 0.7]}[order]
-        lo = {1: [1e-4], 2: [0.5, 0.05], 3: [1e-4, 0.5, 0.05]}[order]
-        hi = {1: [10.0], 2: [2000.0, 5.0], 3: [1.0, 2000.0, 5.0]}[order]
-        theta0 = float(tt[np.argmax(np.abs(yy) > 0.1 * abs(y_end))]) if abs(y_end) > 0 else 0.0
-        x0 = np.array([y_end, theta0 * 0.9, *x0])
-        lo = np.array([-np.inf, 0.0, *lo])
-        hi = np.array([np.inf, tt[-1], *hi])
-        try:
-            res = least_squares(lambda x: model(x) - yy, np.clip(x0, lo + 1e-12, hi - 1e-12), bounds=(lo, hi),
-                                x_scale="jac", max_nfev=200)
-        except (ValueError, np.linalg.LinAlgError):
+        lo = np.array([-np.inf, 0.0, *{1: [1e-4], 2: [0.5, 0.05], 3: [1e-4, 0.5, 0.05]}[order]])
+        hi = np.array([np.inf, tt[-1], *{1: [10.0], 2: [2000.0, 5.0], 3: [1.0, 2000.0, 5.0]}[order]])
+        res = None
+        # a well-damped and a ringing start: the dead time makes the cost surface bumpy
+        for zeta0 in (0.7, 0.15) if order > 1 else (None,):
+            x0 = np.array([y_end, theta0, *{1: [tau0], 2: [2.0 / tau0, zeta0],
+                                            3: [tau0 / 4, 3.0 / tau0, zeta0]}[order]])
+            try:
+                r = least_squares(lambda x: model(x) - yy, np.clip(x0, lo + 1e-12, hi - 1e-12), bounds=(lo, hi),
+                                  x_scale="jac", ftol=1e-4, xtol=1e-4, max_nfev=100)
+            except (ValueError, np.linalg.LinAlgError):
+                continue
+            if res is None or r.cost < res.cost:
+                res = r
+        if res is None:
             continue
         resid = res.fun
         vaf = float(100.0 * (1.0 - np.var(resid) / max(np.var(yy), 1e-30)))
@@ -552,8 +562,9 @@ def frequency_response(rec: Recording, f_min: float = 0.2, f_max: float = 20.0) 
     if nper < 64:
         return None
     f, Puu = signal.welch(u, fs, nperseg=nper)
+    _, Ppp = signal.welch(p, fs, nperseg=nper)
     _, Pup = signal.csd(u, p, fs, nperseg=nper)
-    _, coh = signal.coherence(u, p, fs, nperseg=nper)
+    coh = np.abs(Pup) ** 2 / np.maximum(Puu * Ppp, 1e-300)
     n_avg = max(1, int(2 * u.size / nper) - 1)
     keep = (f >= f_min) & (f <= f_max) & (coh > 0.5) & (Puu > 0)
     if np.count_nonzero(keep) < 5:
@@ -625,19 +636,17 @@ def resonance(rec: Recording, slip_tol: float = 2.0, min_window: float = 0.8) ->
     f0 = ring_frequency(tt, yy - np.polyval(np.polyfit(tau, yy, 1), tau))
     if not np.isfinite(f0) or f0 <= 0:
         return None
-    trend = np.polyfit(tau, yy, 1)
-    amp = float(np.sqrt(2) * np.std(yy - np.polyval(trend, tau)))
-
     def model(x: np.ndarray) -> np.ndarray:
         c0, c1, a, s, om, ph = x
         return c0 + c1 * tau + a * np.exp(-s * tau) * np.cos(om * tau + ph)
 
-    best = None
-    for ph in (0.0, np.pi / 2, np.pi, 3 * np.pi / 2):
-        r = least_squares(lambda x: model(x) - yy, [trend[1], trend[0], amp, 0.5, 2 * np.pi * f0, ph],
-                          x_scale="jac", max_nfev=300)
-        if best is None or r.cost < best.cost:
-            best = r
+    # start values: for a fixed decay and frequency the model is linear in offset, trend, a cos(ph), a sin(ph)
+    s0, om0 = 0.5, 2 * np.pi * f0
+    env = np.exp(-s0 * tau)
+    A = np.column_stack([np.ones_like(tau), tau, env * np.cos(om0 * tau), -env * np.sin(om0 * tau)])
+    lin = np.linalg.lstsq(A, yy, rcond=None)[0]
+    x0 = [lin[0], lin[1], float(np.hypot(lin[2], lin[3])), s0, om0, float(np.arctan2(lin[3], lin[2]))]
+    best = least_squares(lambda x: model(x) - yy, x0, x_scale="jac", max_nfev=300)
     c0, c1, a, s, om, ph = best.x
     om, s = abs(om), s
     resid = best.fun

@@ -52,19 +52,23 @@ def predict_pressure(t: np.ndarray, u: np.ndarray, gain: np.ndarray, p_range: tu
 
 def validate(result: Identification) -> list[dict[str, Any]]:
     """Leave-one-file-out validation of torque and pressure models (see the module docstring)."""
-    from .identify import GAIN_GROUPS, _source, fit_mu, static_gain
+    from .identify import GAIN_GROUPS, _source, static_gain
 
     out: list[dict[str, Any]] = []
-    order = len(result.estimates["mu_slip_poly"].value) - 1 if "mu_slip_poly" in result.estimates else None
-    for s in result.slips:
-        others = [o for o in result.slips if o.rec is not s.rec]
-        if order is None or sum(o.slip.size for o in others) <= order + 1:
-            continue
-        coef = fit_mu(others, order)[0]
-        pred = s.factor * np.polyval(coef, s.slip) + s.offset
-        out.append({"file": str(s.rec.path), "signal": "T_r", "window": _source(s.rec, s.t0, s.t1),
-                    "model": "friction law, mu(slip) from the other files", **scores(s.T_r, pred),
-                    "trace": {"slip": s.slip, "measured": s.T_r, "predicted": pred}})
+    if "mu_slip_poly" in result.estimates and len(result.slips) > 1:
+        order = len(result.estimates["mu_slip_poly"].value) - 1
+        # normal equations per file: leaving one out is a subtraction, not a refit over all the others
+        grams = [(X.T @ X, X.T @ s.mu) for s in result.slips for X in [np.vander(s.slip, order + 1)]]
+        gram_all, rhs_all = sum(g for g, _ in grams), sum(r for _, r in grams)
+        for s, (g, r) in zip(result.slips, grams):
+            try:
+                coef = np.linalg.solve(gram_all - g, rhs_all - r)
+            except np.linalg.LinAlgError:  # the other files cannot determine the polynomial
+                continue
+            pred = s.factor * np.polyval(coef, s.slip) + s.offset
+            out.append({"file": str(s.rec.path), "signal": "T_r", "window": _source(s.rec, s.t0, s.t1),
+                        "model": "friction law, mu(slip) from the other files", **scores(s.T_r, pred),
+                        "trace": {"slip": s.slip, "measured": s.T_r, "predicted": pred}})
     orders = {(c, m): k for c, m, k in GAIN_GROUPS.values()}
     for rec in result.recordings:
         key = (rec.config, rec.input_mode)
