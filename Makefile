@@ -24,6 +24,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_engine.py
 	$(BIN)/python benchmarks/bench_actuator.py
+	$(BIN)/python benchmarks/bench_identify.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

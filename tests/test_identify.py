@@ -272,6 +272,14 @@ def test_unknown_units_name_file_and_channel(small_csv, tmp_path):
         channels.load(tmp_path / "ok.csv")
 
 
+def test_jittery_time_stamps_are_resampled_to_a_uniform_grid(small_csv, tmp_path):
+    jitter = small_csv.assign(time=small_csv.time + np.random.default_rng(0).uniform(-2e-4, 2e-4, len(small_csv)))
+    jitter.to_csv(tmp_path / "jitter.csv", index=False)
+    rec = channels.load(tmp_path / "jitter.csv")
+    assert np.allclose(np.diff(rec.t), rec.dt) and abs(rec.dt - 1e-3) < 1e-5
+    np.testing.assert_allclose(rec.data["omega_p"], np.interp(rec.t, jitter.time, jitter.omega_p))
+
+
 _CORRUPTIONS = ("nan_run", "shuffle", "duplicate", "drop", "garbage", "truncate")
 
 

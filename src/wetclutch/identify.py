@@ -216,7 +216,8 @@ def onset(rec: Recording) -> Onset | None:
     slope_T = (T[k_on] - T[k_on - 1]) / dt
     t_se = float(np.hypot(dt / np.sqrt(12.0), noise / max(slope_T, 1e-9)))
     slip = d["omega_p"] - d["omega_1"]
-    return Onset(rec, float(t[k_cmd]), t_on - float(t[k_cmd]), t_se, p_c, p_c_se, float(u[k_cmd + 5]), base, noise,
+    level = float(u[min(k_cmd + 5, t.size - 1)])
+    return Onset(rec, float(t[k_cmd]), t_on - float(t[k_cmd]), t_se, p_c, p_c_se, level, base, noise,
                  float(np.median(slip[pre])))
 
 
@@ -306,7 +307,7 @@ def fit_mu(samples: Sequence[SlipSamples], order: int) -> tuple[np.ndarray, np.n
     infl = float(np.mean(np.concatenate([np.full(s.slip.size, _inflation(s.mu - np.vander(s.slip, order + 1) @ coef))
                                          for s in samples])))
     s2 = float(resid @ resid) / (slip.size - order - 1)
-    cov = s2 * infl * np.linalg.inv(X.T @ X)
+    cov = s2 * infl * np.linalg.pinv(X.T @ X)
     return coef, cov, float(np.sqrt(np.mean(resid**2)))
 
 
@@ -579,9 +580,11 @@ def frequency_response(rec: Recording, f_min: float = 0.2, f_max: float = 20.0) 
         e = (m - H) / (np.abs(H) * np.maximum(rel, 1e-3))
         return np.concatenate([e.real, e.imag])
 
-    K0 = float(np.abs(H[0]))
-    x0 = np.array([K0, 0.01, 2 * np.pi * max(f[-1] / 2, 1.0), 0.7])
-    res = least_squares(resid, x0, bounds=([0, 0, 0.1, 0.02], [np.inf, 1.0, 2000.0, 10.0]), x_scale="jac")
+    x0 = np.array([max(float(np.abs(H[0])), 1e-9), 0.01, 2 * np.pi * min(max(f[-1] / 2, 1.0), 300.0), 0.7])
+    try:
+        res = least_squares(resid, x0, bounds=([0, 0, 0.1, 0.02], [np.inf, 1.0, 2000.0, 10.0]), x_scale="jac")
+    except (ValueError, np.linalg.LinAlgError):  # a response no second-order model can follow
+        return None
     dof = max(2 * f.size - 4, 1)
     cov = np.linalg.pinv(res.jac.T @ res.jac) * float(res.fun @ res.fun) / dof
     se = np.sqrt(np.abs(np.diag(cov)))
