@@ -149,6 +149,19 @@ def test_step_model_recovers_first_order_plus_dead_time():
     assert abs(m1.gain / gain - 1) < 0.01 and m1.vaf > 99
 
 
+def test_step_model_recovers_a_third_order_valve():
+    t = np.arange(0.0, 4.0, 1e-3)
+    tau_c, wn, zeta, theta = 0.02, 2 * np.pi * 8.0, 0.5, 0.03
+    u = np.where(t >= 1.0, 0.3, 0.1)
+    sys_ = ([wn**2], np.polymul([tau_c, 1.0], [1.0, 2 * zeta * wn, wn**2]))
+    _, y, _ = signal.lsim(sys_, np.where(t >= 1.0 + theta, 0.2, 0.0), t)
+    p = 2e5 + 20e5 * y + np.random.default_rng(2).normal(0, 2e3, t.size)
+    (m3,) = identify.step_models(_recording(t, u, p, "step"), orders=(3,))
+    got = m3.params
+    assert abs(got["tau_coil_s"] / tau_c - 1) < 0.1 and abs(got["omega_n_rad_s"] / wn - 1) < 0.05
+    assert abs(got["zeta"] / zeta - 1) < 0.1 and abs(m3.theta - theta) < 0.003 and m3.vaf > 99
+
+
 def test_frequency_response_recovers_a_second_order_system():
     rng = np.random.default_rng(1)
     t = np.arange(0.0, 40.0, 1e-3)
