@@ -199,9 +199,7 @@ ENGINEERING = {  # channel -> (name in the file, unit, factor from SI, offset)
 }
 
 
-def test_engineering_units_through_a_channel_map_give_the_same_result(identified, rig_data, tmp_path):
-    _, root, _ = rig_data
-    cmap = ["[u]", 'name = "cmd"', 'unit = "%"']  # the duty cycle in per cent; volts in mV
+def test_engineering_units_through_a_channel_map_give_the_same_result(identified, tmp_path):
     files = []
     for rec in identified.recordings:
         si = pd.read_csv(rec.path.parent / "measured.csv")
@@ -209,7 +207,7 @@ def test_engineering_units_through_a_channel_map_give_the_same_result(identified
         for ch, (name, unit, f, off) in ENGINEERING.items():
             if ch not in si:
                 continue
-            if ch == "u":
+            if ch == "u":  # a duty cycle in per cent, a voltage in mV
                 eng[name] = si[ch] * (100.0 if rec.input_mode == "pwm" else 1e3)
             else:
                 eng[name] = si[ch] * f + off
@@ -218,9 +216,9 @@ def test_engineering_units_through_a_channel_map_give_the_same_result(identified
         pd.DataFrame(eng).to_csv(d / "data.csv", index=False, float_format="%.12g")
         files.append(d / "data.csv")
     lines = [f'{ch} = {{ name = "{n}", unit = "{u}" }}' for ch, (n, u, *_) in ENGINEERING.items() if u]
-    (tmp_path / "map.toml").write_text("\n".join(lines) + "\n")
-    (tmp_path / "map_mv.toml").write_text("\n".join(lines + ['u = { name = "cmd", unit = "mV" }']) + "\n")
-    (tmp_path / "map_pct.toml").write_text("\n".join(lines + ["\n".join(cmap)]) + "\n")
+    (tmp_path / "map_mv.toml").write_text("\n".join([*lines, 'u = { name = "cmd", unit = "mV" }']) + "\n")
+    # the table form of an entry
+    (tmp_path / "map_pct.toml").write_text("\n".join([*lines, "[u]", 'name = "cmd"', 'unit = "%"']) + "\n")
     mv = channels.read_channel_map(tmp_path / "map_mv.toml")
     pct = channels.read_channel_map(tmp_path / "map_pct.toml")
     recs = [channels.load(f, pct if "stair" in str(f) or "noise" in str(f) else mv) for f in files]

@@ -1,21 +1,22 @@
 """Identification: from measurement files back to the clutch's parameters (spec sections 3 to 6 and 8).
 
 Each estimator is a function over the arrays of checked recordings
-(:class:`wetclutch.channels.Recording`, SI units) that returns an
-:class:`Estimate`: the value, its standard error and the files and time windows
-it came from. :func:`identify` runs all estimators that the recordings support:
+(:class:`wetclutch.channels.Recording`, SI units) that returns its value with a
+standard error and the files and time windows it came from (an :class:`Estimate`,
+or a small record per run). :func:`identify` runs all estimators that the
+recordings support:
 
 * torque onset after a command step: dead time and contact pressure (:func:`onset`);
 * friction versus slip from the slip phase of clutch runs (:func:`friction`), also
   binned by pressure and by oil temperature;
 * static pressure versus command on the plateaus of steps and staircases, with the
-  hysteresis between up and down staircases (:func:`static_gains`);
+  hysteresis between up and down staircases (:func:`static_gain`, :func:`hysteresis`);
 * low-order pressure models fitted to steps and relaxations (:func:`step_models`)
   and the frequency response from noise, multisine and chirp runs
   (:func:`frequency_response`), as python-control LTI objects;
 * driveline resonance and damping from the ring-out after synchronisation (:func:`resonance`);
 * validation of the friction law and of the pressure model on each file left out
-  of the fit (:func:`validate`).
+  of the fit (:func:`wetclutch.validation.validate`).
 
 The rig's sensors low-pass filter their signals (:data:`wetclutch.measurement.DEFAULT_SENSORS`,
 assumed for any rig); each channel is advanced by its filter's low-frequency group
@@ -481,10 +482,10 @@ def step_models(rec: Recording, orders: Sequence[int] | None = None) -> list[Ste
     for order in orders:
         # z = [gain, dead time, log of the positive shape parameters]: unconstrained, so that the fast
         # Levenberg-Marquardt solver applies (a fit per step in a campaign of hundreds)
-        def model(z: np.ndarray) -> np.ndarray:
+        def model(z: np.ndarray, order: int = order) -> np.ndarray:
             return z[0] * _step_poles(_poles(order, np.exp(z[2:])), np.maximum(tt - z[1], 0.0))[0]
 
-        def jac(z: np.ndarray) -> np.ndarray:
+        def jac(z: np.ndarray, order: int = order) -> np.ndarray:
             # gain and dead time analytically (the impulse response), the shape by forward differences
             s = np.maximum(tt - z[1], 0.0)
             step, impulse = _step_poles(_poles(order, np.exp(z[2:])), s)
@@ -661,8 +662,7 @@ def resonance(rec: Recording, slip_tol: float = 2.0, min_window: float = 0.8) ->
     lin = np.linalg.lstsq(A, yy, rcond=None)[0]
     x0 = [lin[0], lin[1], float(np.hypot(lin[2], lin[3])), s0, om0, float(np.arctan2(lin[3], lin[2]))]
     best = least_squares(lambda x: model(x) - yy, x0, x_scale="jac", max_nfev=300)
-    c0, c1, a, s, om, ph = best.x
-    om, s = abs(om), s
+    s, om = best.x[3], abs(best.x[4])  # decay rate and angular frequency; the sign of om is the phase's
     resid = best.fun
     cov = np.linalg.pinv(best.jac.T @ best.jac) * float(resid @ resid) / max(tt.size - 6, 1) * _inflation(resid)
     se = np.sqrt(np.abs(np.diag(cov)))

@@ -40,7 +40,7 @@ def write(result: Identification, out: str | Path) -> None:
 
 
 def _changed(result: Identification) -> list[tuple[str, Any, Any]]:
-    prior = dict((p, v) for p, v, *_ in params_mod.describe(result.prior))
+    prior = {p: v for p, v, *_ in params_mod.describe(result.prior)}
     return [(p, prior[p], v) for p, v, *_ in params_mod.describe(result.identified) if v != prior[p]]
 
 
