@@ -283,6 +283,16 @@ def test_unknown_units_name_file_and_channel(small_csv, tmp_path):
         channels.load(tmp_path / "ok.csv")
 
 
+def test_meta_json_beside_a_file_is_used_only_where_it_makes_sense(small_csv, tmp_path):
+    small_csv.to_csv(tmp_path / "run.csv", index=False)
+    (tmp_path / "meta.json").write_text(json.dumps({"experiment": "warp", "settings": {"config": "gearbox"}}))
+    rec = channels.load(tmp_path / "run.csv")
+    assert (rec.experiment, rec.config) == ("step", "clutch")  # detected instead
+    (tmp_path / "meta.json").write_text("{not json")
+    with pytest.raises(WetclutchError, match="meta.json"):
+        channels.load(tmp_path / "run.csv")
+
+
 def test_jittery_time_stamps_are_resampled_to_a_uniform_grid(small_csv, tmp_path):
     jitter = small_csv.assign(time=small_csv.time + np.random.default_rng(0).uniform(-2e-4, 2e-4, len(small_csv)))
     jitter.to_csv(tmp_path / "jitter.csv", index=False)

@@ -31,6 +31,7 @@ import numpy as np
 
 from .errors import WetclutchError
 from .measurement import read_columns
+from .clutch import CONFIGS
 from .rig import EXPERIMENTS, MEASURED_UNITS
 
 REQUIRED = ("time", "u", "p_clutch", "oil_temp")
@@ -198,7 +199,7 @@ def load(path: str | Path, channel_map: Mapping[str, Mapping[str, str]] | None =
         # estimators filter and take spectra on a uniform grid; a jittery DAQ clock is resampled
         grid = t[0] + dt * np.arange(int((t[-1] - t[0]) / dt) + 1)
         data = {c: grid if c == "time" else np.interp(grid, t, x) for c, x in data.items()}
-    config = str(settings.get("config") or ("clutch" if present else "valve-only"))
+    config = settings.get("config") if settings.get("config") in CONFIGS else ("clutch" if present else "valve-only")
     if config == "clutch" and not present:
         raise fail(f"channel '{DRIVELINE[0]}' missing (meta.json says it is a clutch run)")
     input_mode = "pwm" if command_unit in _PWM_UNITS else "dc"
