@@ -25,6 +25,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_engine.py
 	$(BIN)/python benchmarks/bench_actuator.py
 	$(BIN)/python benchmarks/bench_launch.py
+	$(BIN)/python benchmarks/bench_identify.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

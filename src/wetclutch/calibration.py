@@ -26,10 +26,9 @@ import numpy as np
 from . import clutch, driveline
 from .scenarios import simulate
 from .network import integrate
+from .onset import TORQUE_ONSET, first_crossing
 from .params import Params
 from .signals import Step, Table
-
-TORQUE_ONSET = 0.2  # N m of clutch torque: the onset of torque (about the torque sensor's noise)
 
 
 @dataclass
@@ -61,14 +60,11 @@ def onset(p: Params, duty: float, temp: float, t_end: float = 3.0) -> tuple[floa
     """(dead time s, pressure Pa at onset) for a PWM step from 0 to ``duty`` at ``T_STEP``."""
     rn = clutch.build(p, Step(1.0, 0.0, duty), pwm=True, temp_C=temp)
     tr = integrate(rn.network, t_end, dt_out=1e-4)
-    torque = np.abs(tr.clutch_torque("clutch"))
-    i = np.flatnonzero(torque > TORQUE_ONSET)
-    if i.size == 0 or i[0] == 0:
+    crossing = first_crossing(tr.t, np.abs(tr.clutch_torque("clutch")), TORQUE_ONSET)
+    if crossing is None:
         return np.nan, np.nan
-    # the crossing between the two samples that straddle it (the pressure rises steeply there)
-    k = i[0]
-    f = (TORQUE_ONSET - torque[k - 1]) / (torque[k] - torque[k - 1])
-    t_on = tr.t[k - 1] + f * (tr.t[k] - tr.t[k - 1])
+    # the pressure between the two samples that straddle the onset (it rises steeply there)
+    t_on, k, f = crossing
     p_on = tr.x[k - 1, rn.i_pressure] + f * (tr.x[k, rn.i_pressure] - tr.x[k - 1, rn.i_pressure])
     return float(t_on - 1.0), float(p_on)
 

@@ -149,6 +149,32 @@ def _cmd_report(args: argparse.Namespace) -> None:
           f"-> {args.out}/report.md")
 
 
+def _cmd_identify(args: argparse.Namespace) -> None:
+    from rich.console import Console
+    from rich.progress import Progress
+
+    from . import channels, identify, identify_report
+
+    prior = _load_params(args)
+    cmap = channels.read_channel_map(args.channels)
+    with Progress(console=Console(stderr=True), transient=True, disable=not sys.stderr.isatty()) as bar:
+        task = bar.add_task("reading", total=2 * len(args.files))
+        recs = []
+        for f in args.files:
+            bar.update(task, description=f"reading {f}")
+            recs.append(channels.load(f, cmap))
+            bar.advance(task)
+        res = identify.identify(recs, prior, args.mu_order,
+                                progress=lambda name: bar.update(task, advance=1, description=f"identifying {name}"))
+        bar.update(task, description=f"writing {args.out}")
+        identify_report.write(res, args.out)
+    e = res.estimates
+    found = ", ".join(k for k in ("mu_slip_poly", "contact_pressure_Pa", "valve_gain", "clutch_gain_poly_bar_per_V",
+                                  "resonance_Hz") if k in e)
+    print(f"identify: {len(recs)} files, {len(res.onsets)} onsets, {len(res.steps)} step models, "
+          f"{len(res.responses)} frequency responses; {found or 'nothing'} -> {args.out}")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="wetclutch", description="Wet-clutch driveline model, virtual rig, identification, control.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -212,6 +238,15 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--workers", type=int, metavar="W")
     rep.add_argument("--quiet", action="store_true")
     rep.set_defaults(func=_cmd_report)
+
+    idf = sub.add_parser("identify", help="identify the clutch from measurement files; write identified.json, "
+                                          "params.toml, report.md")
+    idf.add_argument("files", nargs="+", metavar="FILE", help="measurement files (.csv, .mf4, .mat)")
+    idf.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced as a whole)")
+    idf.add_argument("--channels", metavar="MAP.toml", help="channel map: names and units of the files' channels")
+    idf.add_argument("--mu-order", type=int, default=2, metavar="N", help="order of the mu(slip) polynomial (default 2)")
+    _param_args(idf)  # the prior: piston area, efficiency, inertias ... and the base of params.toml
+    idf.set_defaults(func=_cmd_identify)
 
     par = sub.add_parser("params", help="show or export the parameter record")
     psub = par.add_subparsers(dest="params_command", required=True, parser_class=_Parser)

@@ -209,10 +209,29 @@ def _read_mat(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     units = {str(k): v for k, v in units.items() if isinstance(v, str)} if isinstance(units, dict) else {}
     columns = {}
     for name, value in raw.items():
+        if isinstance(value, dict) and "X" in value and "Y" in value:
+            return _dspace_columns(value)
         value = np.asarray(value)
         # Skip MATLAB's bookkeeping entries and anything that is not one numeric vector.
         if not name.startswith("__") and value.dtype.kind in "biuf" and value.squeeze().ndim <= 1:
             columns[name] = np.atleast_1d(value.squeeze()).astype(np.float64)
+    return columns, units
+
+
+def _dspace_columns(rec: dict[str, Any]) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+    """A dSPACE recording: struct with ``X`` (time base) and ``Y`` (array of structs ``Name``, ``Data``, ``Unit``)."""
+    x = rec["X"][0] if isinstance(rec["X"], list) else rec["X"]
+    ys = rec["Y"] if isinstance(rec["Y"], list) else [rec["Y"]]
+    columns = {"time": np.atleast_1d(np.asarray(x["Data"], dtype=np.float64).squeeze())}
+    units = {"time": str(x.get("Unit") or "s")}
+    for y in ys:
+        # ControlDesk names are block paths ("Model Root/ctrl/p_clutch"); the last part names the signal
+        name = str(y["Name"]).strip().strip('"').split("/")[-1]
+        data = np.asarray(y["Data"])
+        if data.dtype.kind in "biuf" and data.squeeze().ndim <= 1 and name not in columns:
+            columns[name] = np.atleast_1d(data.squeeze()).astype(np.float64)
+            if isinstance(y.get("Unit"), str) and y["Unit"]:
+                units[name] = y["Unit"]
     return columns, units
 
 
@@ -239,6 +258,58 @@ def _read_mdf(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
 _READERS = {".csv": _read_csv, ".mat": _read_mat, ".mf4": _read_mdf, ".mdf": _read_mdf}
 
 
+def read_columns(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+    """Read every numeric channel of a measurement file, unchecked.
+
+    CSV, MDF 4 (``.mf4``/``.mdf``; the first channel group with a master channel,
+    which is returned as ``time``) and MATLAB files: one vector per variable, or a
+    dSPACE recording (a struct with ``X`` and ``Y``).
+
+    Returns
+    -------
+    dict of str to ndarray
+        Channel name -> float64 samples, as stored (lengths may differ).
+    dict of str to str
+        Unit per channel, as far as the file records them (none for CSV).
+
+    Raises
+    ------
+    WetclutchError
+        The file is missing, of unknown type, unreadable or corrupt.
+    """
+    path = Path(path)
+    reader = _READERS.get(path.suffix.lower())
+    if reader is None:
+        raise _fail(path, "unknown type (use .csv, .mf4, .mdf or .mat)")
+    if not path.is_file():
+        raise _fail(path, "not found")
+    problem, previous = None, sys.unraisablehook
+    # asammdf's MDF.__del__ fails on objects whose constructor raised, printing a traceback a user
+    # would take for a crash. Such objects sit in reference cycles, so collect them here, under a
+    # hook that hides that; freezing all older objects keeps the collection cheap.
+    sys.unraisablehook = lambda u: None if getattr(u.object, "__module__", "").startswith("asammdf") else previous(u)
+    if mdf := reader is _read_mdf:
+        gc.freeze()
+    try:
+        try:
+            return reader(path)
+        except WetclutchError:
+            raise
+        except Exception as err:  # parsers of corrupt files raise almost anything
+            problem = f"cannot read it ({type(err).__name__}: {_one_line(err)[:200]})"
+        if mdf:
+            gc.collect()
+    finally:
+        if mdf:
+            gc.unfreeze()
+        sys.unraisablehook = previous
+    raise _fail(path, problem)
+
+
+def _fail(path: Path, why: str) -> WetclutchError:
+    return WetclutchError(_one_line(f"measurement file '{path}': {why}"))
+
+
 def read_measurement(path: str | Path) -> tuple[pd.DataFrame, dict[str, str]]:
     """Read a measurement file as written by :func:`write_measurement`.
 
@@ -260,40 +331,13 @@ def read_measurement(path: str | Path) -> tuple[pd.DataFrame, dict[str, str]]:
         The file is missing, unreadable or corrupt, or has no valid time channel.
     """
     path = Path(path)
-    fail = lambda why: WetclutchError(_one_line(f"measurement file '{path}': {why}"))  # noqa: E731
-    reader = _READERS.get(path.suffix.lower())
-    if reader is None:
-        raise fail("unknown type (use .csv, .mf4, .mdf or .mat)")
-    if not path.is_file():
-        raise fail("not found")
-    problem, previous = None, sys.unraisablehook
-    # asammdf's MDF.__del__ fails on objects whose constructor raised, printing a traceback a user
-    # would take for a crash. Such objects sit in reference cycles, so collect them here, under a
-    # hook that hides that; freezing all older objects keeps the collection cheap.
-    sys.unraisablehook = lambda u: None if getattr(u.object, "__module__", "").startswith("asammdf") else previous(u)
-    if mdf := reader is _read_mdf:
-        gc.freeze()
-    try:
-        try:
-            columns, units = reader(path)
-        except WetclutchError:
-            raise
-        except Exception as err:  # parsers of corrupt files raise almost anything
-            problem = f"cannot read it ({type(err).__name__}: {_one_line(err)[:200]})"
-        if problem is not None and mdf:
-            gc.collect()
-    finally:
-        if mdf:
-            gc.unfreeze()
-        sys.unraisablehook = previous
-    if problem is not None:
-        raise fail(problem)
+    columns, units = read_columns(path)
     time = columns.pop("time", None)
     if time is None:
-        raise fail("no time channel")
+        raise _fail(path, "no time channel")
     if len(time) == 0 or not np.all(np.isfinite(time)) or np.any(np.diff(time) <= 0):
-        raise fail("time is empty, not finite or not increasing")
+        raise _fail(path, "time is empty, not finite or not increasing")
     for name, values in columns.items():
         if len(values) != len(time):
-            raise fail(f"channel '{name}' has {len(values)} samples, time has {len(time)}")
+            raise _fail(path, f"channel '{name}' has {len(values)} samples, time has {len(time)}")
     return pd.DataFrame({"time": time, **columns}), units

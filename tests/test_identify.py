@@ -1,0 +1,397 @@
+"""Identification: round trip on virtual-rig data with known parameters, file robustness, channel maps, CLI."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from scipy import io as sio
+from scipy import signal
+
+from wetclutch import channels, clutch, driveline, identify, params, rig
+from wetclutch.errors import WetclutchError
+from wetclutch.onset import TORQUE_ONSET, first_crossing
+
+#: the rig's true parameters: not the defaults, so that recovering them means something
+TRUE = {"friction.mu_slip_poly": [-1.2e-6, 2.2e-4, 3.0e-2], "driveline.ratio": 0.6}
+RUNS = {
+    "step41": dict(experiment="step", level=1.5, oil_temp_C=41.0, seed=1),
+    "step85": dict(experiment="step", level=2.5, oil_temp_C=85.0, seed=2),
+    "stair": dict(experiment="staircase", config="valve-only", input_mode="pwm", level=0.15, from_=0.0, seed=3),
+    "noise": dict(experiment="noise", config="valve-only", input_mode="pwm", level=0.15, from_=0.0, seed=4),
+}
+
+
+@pytest.fixture(scope="module")
+def rig_data(tmp_path_factory):
+    """The virtual rig's runs with the true parameters, written like a real rig (once per module)."""
+    p = params.load(overrides=TRUE)
+    root = tmp_path_factory.mktemp("rig_runs")
+    results = {}
+    for name, kw in RUNS.items():
+        kw = dict(kw)
+        res = rig.run(kw.pop("experiment"), p, **kw)
+        rig.write(res, root / name)
+        results[name] = res
+    return p, root, results
+
+
+@pytest.fixture(scope="module")
+def identified(rig_data):
+    _, root, _ = rig_data
+    recs = [channels.load(root / n / f"measured.{ext}") for n, ext in zip(RUNS, ("mf4", "csv", "mat", "mf4"))]
+    return identify.identify(recs)
+
+
+def true_dead_time(res: rig.RigResult) -> float:
+    tr = res.truth
+    t_on = first_crossing(tr.time.to_numpy(), np.abs(tr.T_c.to_numpy()), TORQUE_ONSET)[0]
+    return t_on - rig.T_STEP
+
+
+# ---------------------------------------------------------------- round trip
+
+
+def test_files_are_read_as_the_experiments_they_are(identified):
+    kinds = [(r.experiment, r.config, r.input_mode) for r in identified.recordings]
+    assert kinds == [("step", "clutch", "dc"), ("step", "clutch", "dc"), ("staircase", "valve-only", "pwm"),
+                     ("noise", "valve-only", "pwm")]
+
+
+def test_friction_polynomial_is_recovered(identified):
+    est = identified.estimates["mu_slip_poly"]
+    true = np.array(TRUE["friction.mu_slip_poly"])
+    np.testing.assert_allclose(est.value, true, rtol=0.05)
+    w = np.linspace(10.0, 150.0, 50)
+    assert np.max(np.abs(np.polyval(est.value, w) / np.polyval(true, w) - 1.0)) < 0.02
+    assert all(s > 0 for s in est.se)
+    # the standard errors are honest: the truth lies within a few of them
+    assert np.all(np.abs(np.array(est.value) - true) < 6.0 * np.array(est.se) + 0.01 * np.abs(true))
+
+
+def test_dead_time_and_contact_pressure_are_recovered(identified, rig_data):
+    p, _, results = rig_data
+    assert len(identified.onsets) == 2
+    for o, name in zip(identified.onsets, ("step41", "step85")):
+        assert abs(o.dead_time - true_dead_time(results[name])) < 0.015, name
+        assert abs(o.rec.oil_temp_C - RUNS[name]["oil_temp_C"]) < 0.5
+    est = identified.estimates["contact_pressure_Pa"]
+    assert abs(est.value - clutch.p_contact(p)) < 0.05e5
+    dts = {round(o.rec.oil_temp_C): o.dead_time for o in identified.onsets}
+    assert dts[41] > dts[85]  # cold oil fills slower (spec 6)
+
+
+def test_ratio_and_resonance_are_recovered(identified, rig_data):
+    _, _, results = rig_data
+    assert abs(identified.estimates["ratio"].value / TRUE["driveline.ratio"] - 1.0) < 0.005
+    for rg in identified.ringings:
+        tr = results["step41" if "step41" in str(rg.rec.path) else "step85"]
+        after = tr.truth[tr.truth.time > tr.meta["t_sync"] + 0.2]
+        f_true = driveline.ring_frequency(after.time.to_numpy(), after.T_r.to_numpy())
+        assert abs(rg.freq / f_true - 1.0) < 0.02
+        assert 0.0 < rg.zeta < 0.2
+    assert len(identified.ringings) == 2
+
+
+def test_valve_gain_matches_the_true_static_pressures(identified, rig_data):
+    _, _, results = rig_data
+    est = identified.estimates["valve_gain"]
+    truth = results["stair"].truth
+    fit = identified.estimates["valve_gain_poly"]
+    for u, _ in fit.extra["points"]:
+        # the noise-free pressure at the end of each dwell at this duty
+        at = truth[(np.abs(truth.u - u) < 1e-9)]
+        ends = at.time.to_numpy()[np.flatnonzero(np.diff(at.time.to_numpy(), append=np.inf) > 0.01)]
+        for t_end in ends:
+            p_true = truth.p_clutch.to_numpy()[np.searchsorted(truth.time, t_end - 0.05)] / 1e5
+            p_fit = est.value["slope_bar_per_duty"] * u + est.value["offset_bar"]
+            assert abs(p_fit - p_true) < 0.15
+    assert est.value["slope_bar_per_duty"] > 0 and est.se["slope_bar_per_duty"] > 0
+
+
+def test_pressure_models_and_frequency_response_are_lti(identified):
+    import control
+
+    assert {m.order for m in identified.steps} == {1, 2}
+    for m in identified.steps:
+        sys_ = m.lti()
+        assert isinstance(sys_, control.TransferFunction)
+        assert np.isclose(control.dcgain(sys_), m.gain, rtol=1e-6)
+    (fr,) = identified.responses
+    assert isinstance(fr.frd(), control.FrequencyResponseData)
+    assert fr.freq.min() >= 0.2 and np.all(fr.coherence > 0.5)
+
+
+# ---------------------------------------------------------------- estimators on signals of known form
+
+
+def _recording(t: np.ndarray, u: np.ndarray, p: np.ndarray, experiment: str) -> channels.Recording:
+    data = {"time": t, "u": u, "p_clutch": p, "oil_temp": np.full(t.size, 60.0)}
+    return channels.Recording(Path("synthetic.csv"), data, experiment, "valve-only", "pwm")
+
+
+def test_step_model_recovers_first_order_plus_dead_time():
+    t = np.arange(0.0, 5.0, 1e-3)
+    tau, theta, gain = 0.08, 0.12, 20e5
+    u = np.where(t >= 1.0, 0.3, 0.1)
+    s = np.clip(t - 1.0 - theta, 0.0, None)
+    p = 0.1 * gain + 0.2 * gain * (1 - np.exp(-s / tau)) + np.random.default_rng(0).normal(0, 2e3, t.size)
+    (m1,) = identify.step_models(_recording(t, u, p, "step"), orders=(1,))
+    assert abs(m1.params["tau_s"] / tau - 1) < 0.03 and abs(m1.theta - theta) < 0.003
+    assert abs(m1.gain / gain - 1) < 0.01 and m1.vaf > 99
+
+
+def test_step_model_recovers_a_third_order_valve():
+    t = np.arange(0.0, 4.0, 1e-3)
+    tau_c, wn, zeta, theta = 0.02, 2 * np.pi * 8.0, 0.5, 0.03
+    u = np.where(t >= 1.0, 0.3, 0.1)
+    sys_ = ([wn**2], np.polymul([tau_c, 1.0], [1.0, 2 * zeta * wn, wn**2]))
+    _, y, _ = signal.lsim(sys_, np.where(t >= 1.0 + theta, 0.2, 0.0), t)
+    p = 2e5 + 20e5 * y + np.random.default_rng(2).normal(0, 2e3, t.size)
+    (m3,) = identify.step_models(_recording(t, u, p, "step"), orders=(3,))
+    got = m3.params
+    assert abs(got["tau_coil_s"] / tau_c - 1) < 0.1 and abs(got["omega_n_rad_s"] / wn - 1) < 0.05
+    assert abs(got["zeta"] / zeta - 1) < 0.1 and abs(m3.theta - theta) < 0.003 and m3.vaf > 99
+
+
+def test_frequency_response_recovers_a_second_order_system():
+    rng = np.random.default_rng(1)
+    t = np.arange(0.0, 40.0, 1e-3)
+    sos = signal.butter(2, [0.1, 20.0], btype="band", fs=1000.0, output="sos")
+    u = 0.2 + 0.05 * signal.sosfilt(sos, rng.standard_normal(t.size)) / 0.1
+    wn, zeta, gain = 2 * np.pi * 6.0, 0.4, 10e5
+    _, y, _ = signal.lsim(([gain * wn**2], [1, 2 * zeta * wn, wn**2]), u - 0.2, t)
+    fr = identify.frequency_response(_recording(t, u, 2e5 + y + rng.normal(0, 2e3, t.size), "noise"))
+    mp = fr.model_params
+    assert abs(mp["omega_n_rad_s"] / wn - 1) < 0.05 and abs(mp["zeta"] / zeta - 1) < 0.1
+    assert abs(mp["gain_bar_per_unit"] / 10.0 - 1) < 0.05 and mp["dead_time_s"] < 0.005
+
+
+@pytest.mark.parametrize("experiment", rig.EXPERIMENTS)
+def test_experiment_is_detected_from_the_command(experiment):
+    s = rig.Settings(experiment=experiment, input_mode="pwm", level=0.3, from_=0.05).checked(params.Params())
+    u_sig, duration = rig.input_signal(s)
+    t = np.arange(0.0, duration, 1e-3)
+    u = rig._sample(u_sig, t)
+    assert channels.detect_experiment(t, u) == experiment
+
+
+# ---------------------------------------------------------------- files: channel maps, dSPACE, bad input
+
+ENGINEERING = {  # channel -> (name in the file, unit, factor from SI, offset)
+    "time": ("t_ms", "ms", 1e3, 0.0),
+    "u": ("cmd", None, None, None),
+    "p_clutch": ("P_clutch", "bar", 1e-5, 0.0),
+    "T_r": ("torque_out", "kN m", 1e-3, 0.0),
+    "omega_p": ("n_prim", "rpm", 60 / (2 * np.pi), 0.0),
+    "omega_1": ("n_cvt_in", "rpm", 60 / (2 * np.pi), 0.0),
+    "omega_r": ("n_cvt_out", "rpm", 60 / (2 * np.pi), 0.0),
+    "omega_s": ("n_sec", "rpm", 60 / (2 * np.pi), 0.0),
+    "oil_temp": ("T_oil", "K", 1.0, 273.15),
+}
+
+
+def test_engineering_units_through_a_channel_map_give_the_same_result(identified, tmp_path):
+    files = []
+    for rec in identified.recordings:
+        si = pd.read_csv(rec.path.parent / "measured.csv")
+        eng = {}
+        for ch, (name, unit, f, off) in ENGINEERING.items():
+            if ch not in si:
+                continue
+            if ch == "u":  # a duty cycle in per cent, a voltage in mV
+                eng[name] = si[ch] * (100.0 if rec.input_mode == "pwm" else 1e3)
+            else:
+                eng[name] = si[ch] * f + off
+        d = tmp_path / rec.path.parent.name  # no meta.json here: the experiment is detected
+        d.mkdir()
+        pd.DataFrame(eng).to_csv(d / "data.csv", index=False, float_format="%.12g")
+        files.append(d / "data.csv")
+    lines = [f'{ch} = {{ name = "{n}", unit = "{u}" }}' for ch, (n, u, *_) in ENGINEERING.items() if u]
+    (tmp_path / "map_mv.toml").write_text("\n".join([*lines, 'u = { name = "cmd", unit = "mV" }']) + "\n")
+    # the table form of an entry
+    (tmp_path / "map_pct.toml").write_text("\n".join([*lines, "[u]", 'name = "cmd"', 'unit = "%"']) + "\n")
+    mv = channels.read_channel_map(tmp_path / "map_mv.toml")
+    pct = channels.read_channel_map(tmp_path / "map_pct.toml")
+    recs = [channels.load(f, pct if "stair" in str(f) or "noise" in str(f) else mv) for f in files]
+    eng = identify.identify(recs)
+    si = identify.identify([channels.load(r.path.parent / "measured.csv") for r in identified.recordings])
+    assert [r.experiment for r in recs] == [r.experiment for r in identified.recordings]
+    for key in ("mu_slip_poly", "contact_pressure_Pa", "ratio", "resonance_Hz", "valve_gain_poly", "damping_ratio"):
+        a, b = np.array(eng.estimates[key].value), np.array(si.estimates[key].value)
+        # rounding in the unit conversion may move a window edge by one sample: a tiny fraction of the SE
+        assert np.all(np.abs(a - b) <= 1e-6 * np.abs(b) + 0.1 * np.array(si.estimates[key].se)), key
+    np.testing.assert_allclose([o.dead_time for o in eng.onsets], [o.dead_time for o in si.onsets], atol=1e-9)
+
+
+def test_dspace_mat_recording_reads_like_the_csv(rig_data, tmp_path):
+    _, root, _ = rig_data
+    si = pd.read_csv(root / "step85" / "measured.csv")
+    units = {"u": "V", "p_clutch": "bar", "T_r": "Nm", "oil_temp": "degC"}
+    scale = {"p_clutch": 1e-5}
+    ys = np.array([(f"Model Root/Plant/{c}", si[c].to_numpy() * scale.get(c, 1.0), units.get(c, "rad/s"))
+                   for c in si.columns if c != "time"], dtype=[("Name", object), ("Data", object), ("Unit", object)])
+    rec = {"X": {"Name": "Time", "Data": si["time"].to_numpy(), "Unit": "s"}, "Y": ys}
+    sio.savemat(tmp_path / "run.mat", {"rec001": rec})
+    got = channels.load(tmp_path / "run.mat")
+    want = channels.load(root / "step85" / "measured.csv")
+    assert got.experiment == "step" and got.config == "clutch"
+    for ch in channels.CHANNELS:
+        np.testing.assert_allclose(got.data[ch], want.data[ch], rtol=1e-9, atol=1e-9, err_msg=ch)
+
+
+@pytest.fixture(scope="module")
+def small_csv(rig_data):
+    _, root, _ = rig_data
+    return pd.read_csv(root / "step85" / "measured.csv").iloc[800:1600].reset_index(drop=True)
+
+
+@pytest.mark.parametrize(("corrupt", "fragment"), [
+    (lambda f: f.drop(columns="p_clutch"), "required channel 'p_clutch' missing"),
+    (lambda f: f.drop(columns="omega_1"), "channel 'omega_1' missing"),
+    (lambda f: f.assign(T_r=np.where((f.index > 100) & (f.index < 140), np.nan, f.T_r)), "channel 'T_r' has 39 non-finite"),
+    (lambda f: f.assign(time=np.where(f.index == 50, f.time.shift(1), f.time)), "duplicated time stamp"),
+    (lambda f: f.iloc[np.r_[0:300, 310:300:-1, 311:800]], "channel 'time' is not increasing"),
+])
+def test_bad_files_give_one_line_naming_file_and_channel(small_csv, tmp_path, corrupt, fragment):
+    path = tmp_path / "bad.csv"
+    corrupt(small_csv).to_csv(path, index=False)
+    with pytest.raises(WetclutchError) as info:
+        channels.load(path)
+    msg = str(info.value)
+    assert fragment in msg and str(path) in msg and "\n" not in msg
+
+
+def test_unknown_units_name_file_and_channel(small_csv, tmp_path):
+    (tmp_path / "map.toml").write_text('p_clutch = { name = "p_clutch", unit = "atm" }\n')
+    with pytest.raises(WetclutchError, match=r"map.toml.*channel 'p_clutch' has unknown unit 'atm'"):
+        channels.read_channel_map(tmp_path / "map.toml")
+    (tmp_path / "bad.toml").write_text('pressure = "p"\n')
+    with pytest.raises(WetclutchError, match="unknown channel 'pressure'"):
+        channels.read_channel_map(tmp_path / "bad.toml")
+    small_csv.to_csv(tmp_path / "ok.csv", index=False)
+    (tmp_path / "meta.json").write_text(json.dumps({"units": {"T_r": "ft lbf"}}))
+    with pytest.raises(WetclutchError, match=r"ok.csv.*channel 'T_r' has unknown unit 'ft lbf'"):
+        channels.load(tmp_path / "ok.csv")
+
+
+def test_meta_json_beside_a_file_is_used_only_where_it_makes_sense(small_csv, tmp_path):
+    small_csv.to_csv(tmp_path / "run.csv", index=False)
+    (tmp_path / "meta.json").write_text(json.dumps({"experiment": "warp", "settings": {"config": "gearbox"}}))
+    rec = channels.load(tmp_path / "run.csv")
+    assert (rec.experiment, rec.config) == ("step", "clutch")  # detected instead
+    (tmp_path / "meta.json").write_text("{not json")
+    with pytest.raises(WetclutchError, match="meta.json"):
+        channels.load(tmp_path / "run.csv")
+
+
+def test_jittery_time_stamps_are_resampled_to_a_uniform_grid(small_csv, tmp_path):
+    jitter = small_csv.assign(time=small_csv.time + np.random.default_rng(0).uniform(-2e-4, 2e-4, len(small_csv)))
+    jitter.to_csv(tmp_path / "jitter.csv", index=False)
+    rec = channels.load(tmp_path / "jitter.csv")
+    assert np.allclose(np.diff(rec.t), rec.dt) and abs(rec.dt - 1e-3) < 1e-5
+    np.testing.assert_allclose(rec.data["omega_p"], np.interp(rec.t, jitter.time, jitter.omega_p))
+
+
+_CORRUPTIONS = ("nan_run", "shuffle", "duplicate", "drop", "garbage", "truncate")
+
+
+@pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(ext=st.sampled_from(["csv", "mat", "mf4"]), kind=st.sampled_from(_CORRUPTIONS), where=st.floats(0.0, 1.0),
+       length=st.integers(1, 400), column=st.sampled_from(list(channels.CHANNELS)), junk=st.binary(max_size=500),
+       seed=st.integers(0, 2**16))
+def test_random_corruptions_never_crash(small_csv, tmp_path_factory, ext, kind, where, length, column, junk, seed):
+    from wetclutch.measurement import write_measurement
+
+    frame = small_csv.copy()
+    n = len(frame)
+    i = int(where * (n - 1))
+    if kind == "nan_run":
+        frame.loc[i:i + length, column] = np.nan
+    elif kind == "shuffle":
+        idx = np.arange(n)
+        idx[i:i + length] = np.random.default_rng(seed).permutation(idx[i:i + length])
+        frame["time"] = frame["time"].to_numpy()[idx]
+    elif kind == "duplicate":
+        frame = frame.iloc[np.sort(np.concatenate([np.arange(n), np.arange(i, min(n, i + length))]))]
+    elif kind == "drop" and column != "time":
+        frame = frame.drop(columns=column)
+    d = tmp_path_factory.mktemp("corrupt")
+    path = d / f"measured.{ext}"
+    if ext == "csv":
+        frame.to_csv(path, index=False)
+    elif kind in ("nan_run", "drop") or ext == "mat":
+        # MDF needs an increasing master channel: time corruptions only reach it through the bytes
+        try:
+            write_measurement(d, frame, {}, {})
+        except WetclutchError:
+            return
+    else:
+        write_measurement(d, small_csv, {}, {})
+    if kind in ("garbage", "truncate"):
+        raw = path.read_bytes()
+        cut = int(where * len(raw))
+        path.write_bytes(raw[:cut] + (junk if kind == "garbage" else b""))
+    try:
+        rec = channels.load(path)
+        identify.identify([rec])
+    except WetclutchError as err:
+        assert str(path) in str(err) or "identif" in str(err) or "measurement" in str(err)
+        assert "\n" not in str(err)
+
+
+# ---------------------------------------------------------------- command line
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "wetclutch.cli", *args], capture_output=True, text=True)
+
+
+def test_cli_identify_writes_outputs_and_a_loadable_param_file(rig_data, tmp_path):
+    _, root, _ = rig_data
+    files = [str(root / n / "measured.mf4") for n in RUNS]
+    out = tmp_path / "id"
+    r = _cli("identify", *files, "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    data = json.loads((out / "identified.json").read_text())
+    for key in ("mu_slip_poly", "contact_pressure_Pa", "valve_gain", "clutch_gain_poly_bar_per_V", "resonance_Hz",
+                "damping_ratio"):
+        assert data[key]["sources"] and all(s["file"] in files for s in data[key]["sources"]), key
+        assert data[key]["se"] is not None
+    assert set(data["valve_gain"]["value"]) == {"slope_bar_per_duty", "offset_bar"}
+    assert [set(d) >= {"oil_temp_C", "input", "value"} for d in data["dead_time_s"]] == [True, True]
+    p = params.load(out / "params.toml")
+    assert abs(p.driveline.ratio - TRUE["driveline.ratio"]) < 0.005
+    np.testing.assert_allclose(p.friction.mu_slip_poly, data["mu_slip_poly"]["value"])
+    report = (out / "report.md").read_text()
+    assert "| parameter | prior | identified |" in report and "Validation on held-out files" in report
+    for v in data["validation"]:
+        assert v["signal"] in ("T_r", "p_clutch") and np.isfinite(v["nrmse"])
+    assert any(v["signal"] == "T_r" and v["vaf_percent"] > 80 for v in data["validation"])
+    for png in ("friction.png", "onset.png", "steps.png", "bode.png", "static.png", "resonance.png", "validation.png"):
+        assert (out / png).stat().st_size > 0
+    sim = _cli("simulate", "engage", "--param-file", str(out / "params.toml"), "--out", str(tmp_path / "sim"))
+    assert sim.returncode == 0, sim.stderr
+
+
+def test_cli_identify_bad_input_is_one_line_and_writes_nothing(rig_data, tmp_path):
+    _, root, _ = rig_data
+    shutil.copy(root / "stair" / "measured.csv", tmp_path / "valve.csv")
+    (tmp_path / "map.toml").write_text('p_clutch = { name = "p_clutch", unit = "furlong" }\n')
+    out = tmp_path / "never"
+    for args in (["identify", str(tmp_path / "valve.csv"), "--channels", str(tmp_path / "map.toml")],
+                 ["identify", str(tmp_path / "missing.csv")],
+                 ["identify", str(tmp_path / "valve.csv"), "--mu-order", "9"]):
+        r = _cli(*args, "--out", str(out))
+        assert r.returncode == 2, r.stderr
+        assert len(r.stderr.strip().splitlines()) == 1 and "error" in r.stderr
+        assert not out.exists()
