@@ -71,13 +71,13 @@ KIND, DT, U_MIN, U_MAX = range(4)
 LAUNCH, PI = 0, 1
 # launch controller
 (P_KISS, HOLD_OFFSET, FILL_EXIT, A_P, RATIO, ETA, MU2, MU1, MU0, F_KNEE, KP_P, KI_P, KP_T, KI_T, P_MAX, TAU_REF,
- HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, FF_T0, FF_DT, FF_NT, FF_P0, FF_DP, FF_NP) = range(4, 34)
-FF_TABLE = 34  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
+ HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, HOLD_LEAD, FILL_EXIT_COLD, FF_T0, FF_DT, FF_NT, FF_P0, FF_DP, FF_NP) = range(4, 36)
+FF_TABLE = 36  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
 # PI baseline (shares the slots after the common fields)
 KP_B, KI_B = 4, 5
 
 # --- controller state
-CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP = range(9)
+CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF = range(10)
 N_CS = 10
 FILL, HOLD, TORQUE, LOCKUP = 0, 1, 2, 3
 SYNC_SLIP = 2.0  # rad/s: measured slip below which the clutch counts as synchronised
@@ -124,8 +124,14 @@ def _launch(ctrl, cs, meas, t_ref):
     temp = meas[M_TEMP]
     phase = int(cs[CS_PHASE])
     p_hold = ctrl[P_KISS] + ctrl[HOLD_OFFSET]
+    # pressure averaged over some 20 ms: the fill decisions must not trip on sensor noise
+    cs[CS_PF] = p if cs[CS_K] == 0.0 else cs[CS_PF] + (p - cs[CS_PF]) * dt / (0.02 + dt)
     if phase == FILL:
-        if p < ctrl[P_KISS] - ctrl[FILL_EXIT]:
+        # scheduled on oil temperature: cold oil strokes the piston slowly through the
+        # viscous line, so the fill may run closer to the kiss point without overshoot
+        a = min(max((temp - 20.0) / 65.0, 0.0), 1.0)
+        exit_ = (1.0 - a) * ctrl[FILL_EXIT_COLD] + a * ctrl[FILL_EXIT]
+        if p < ctrl[P_KISS] - exit_:
             cs[CS_U] = ctrl[U_MAX]
             return ctrl[U_MAX]
         # the piston has stroked most of the way: approach the kiss point gently, since
@@ -155,11 +161,17 @@ def _launch(ctrl, cs, meas, t_ref):
         return ctrl[U_MAX]
     if phase == HOLD:
         cs[CS_PSET] = min(cs[CS_PSET] + ctrl[HOLD_RATE] * dt, p_hold)
-        p_set = cs[CS_PSET]
+        # never ask for much more than the pressure there is: a valve set far above the
+        # stroke pressure opens wide and slams the pressure up when the plates touch
+        p_set = min(cs[CS_PSET], cs[CS_PF] + ctrl[HOLD_LEAD])
     else:
         # the request through a first-order prefilter: a torque step through the valve's
         # fast, underdamped pressure response would jolt the driveline
-        cs[CS_REF] += (t_ref - cs[CS_REF]) * dt / (ctrl[TAU_REF] + dt)
+        # until the fill is complete (cold oil, long line) the request waits, and the
+        # integrator with it: it would only wind up against a clutch that cannot answer yet
+        gated = cs[CS_PF] < p_hold
+        if not gated:
+            cs[CS_REF] += (t_ref - cs[CS_REF]) * dt / (ctrl[TAU_REF] + dt)
         r = cs[CS_REF]
         e_t = r - meas[M_TR]
         # slip from the secondary flywheel, not from omega_1: the light CVT input shakes
@@ -176,8 +188,10 @@ def _launch(ctrl, cs, meas, t_ref):
         sens = _pressure_target(ctrl, r + 1.0, slip, th) - _pressure_target(ctrl, r, slip, th)  # Pa per N m
         p_set = _pressure_target(ctrl, r, slip, th) + cs[CS_ZT] + ctrl[KP_T] * sens * e_t
         p_set = min(max(p_set, p_hold), ctrl[P_MAX])
+        if gated:
+            p_set = min(p_set, cs[CS_PF] + ctrl[HOLD_LEAD])  # finish the fill gently
         u_prev = cs[CS_U]
-        wind_up = (u_prev >= ctrl[U_MAX] and e_t > 0.0) or (u_prev <= ctrl[U_MIN] and e_t < 0.0)
+        wind_up = gated or (u_prev >= ctrl[U_MAX] and e_t > 0.0) or (u_prev <= ctrl[U_MIN] and e_t < 0.0)
         if not wind_up:
             cs[CS_ZT] += ctrl[KI_T] * sens * e_t * dt
     e_p = p_set - p
@@ -233,14 +247,18 @@ class LaunchGains:
     ----------
     hold_offset : float
         Hold the pressure this far above the kiss point while waiting, Pa.
-    fill_exit : float
-        End the full-input fill this far below the kiss point, Pa.
+    fill_exit, fill_exit_cold : float
+        End the full-input fill this far below the kiss point, Pa, with oil at
+        85 C and at 20 C (linear in between).
     hold_rate : float
         Rate at which the pressure set point then approaches the hold pressure, Pa/s.
     kp_p, ki_p : float
         Pressure PI: V/Pa and V/(Pa s).
     kp_hold : float
         Proportional pressure gain while holding at the kiss point, V/Pa.
+    hold_lead : float
+        While approaching the hold, the set point stays at most this far above
+        the measured pressure, Pa.
     dip, dip_time : float
         After the fill, the input drops this far (V) below the hold input for
         this long (s), to bring the magnet onto its rising hysteresis branch.
@@ -261,6 +279,7 @@ class LaunchGains:
 
     hold_offset: float = 0.05e5
     fill_exit: float = 0.1e5
+    fill_exit_cold: float = 0.05e5
     hold_rate: float = 1.0e5
     kp_p: float = 0.05e-5
     ki_p: float = 2.0e-5
@@ -272,6 +291,7 @@ class LaunchGains:
     dither_amp: float = 0.05
     kp_hold: float = 0.05e-5
     dip: float = 0.5
+    hold_lead: float = 0.01e5
     dip_time: float = 0.015
     dither_hz: float = 125.0
 

@@ -204,7 +204,7 @@ def controller_record(name: str, params: Params, gains: Any = None, dt: float = 
         r[control.KP_T], r[control.KI_T], r[control.TAU_REF], r[control.TAU_THETA], r[control.THETA0] = g.kp_t, g.ki_t, g.tau_ref, g.tau_theta, g.theta0
         r[control.P_MAX] = min(h.p_supply, h.p_relief)
         r[control.DITHER_AMP], r[control.DITHER_HALF] = g.dither_amp, round(0.5 / (g.dither_hz * dt))
-        r[control.KP_HOLD] = g.kp_hold
+        r[control.KP_HOLD], r[control.HOLD_LEAD], r[control.FILL_EXIT_COLD] = g.kp_hold, g.hold_lead, g.fill_exit_cold
         r[control.DIP], r[control.DIP_N] = g.dip, round(g.dip_time / dt)
         T, P = control.MAP_TEMPS, control.MAP_PRESSURES
         r[control.FF_T0], r[control.FF_DT], r[control.FF_NT] = T[0], T[1] - T[0], T.size
