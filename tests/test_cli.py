@@ -100,3 +100,37 @@ def test_params_show_lists_units(capsys):
     assert main(["params", "show"]) == 0
     text = capsys.readouterr().out
     assert "driveline.k_a" in text and "N m/rad" in text
+
+
+def test_launch_writes_signals_summary_plot(tmp_path):
+    out = tmp_path / "launch"
+    assert main(["launch", "--out", str(out), "--t-ref", "120", "--oil-temp", "60", "--seed", "2"]) == 0
+    sig = pd.read_csv(out / "signals.csv")
+    assert list(sig.columns) == ["time", "p_clutch", "T_r", "omega_p", "omega_1", "omega_r", "omega_s", "oil_temp",
+                                 "t_ref", "u"]
+    s = json.loads((out / "summary.json").read_text())
+    for key in ("steady_state_error_pct", "t95_s", "overshoot_pct", "jerk_max", "slip_energy_J", "t_sync_s"):
+        assert key in s
+    assert set(s["requirements"]) == {"steady_state_error", "response_time", "robustness"}
+    assert s["params"]["driveline"]["ratio"] == 0.5
+    assert (out / "plot.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (["launch", "--t-ref", "-3"], "--t-ref"),
+        (["launch", "--oil-temp", "900"], "--oil-temp"),
+        (["launch", "--controller", "fuzzy"], "invalid choice"),
+        (["launch", "--profile", "nonexistent.csv"], "--profile"),
+        (["launch", "--set", "friction.mu_scale=0"], "friction.mu_scale"),
+        (["verify", "--samples", "-4"], "--samples"),
+    ],
+)
+def test_launch_and_verify_bad_input(tmp_path, args, fragment):
+    out = tmp_path / "never"
+    r = run(*args, "--out", str(out))
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and fragment in lines[0], r.stderr
+    assert not out.exists()

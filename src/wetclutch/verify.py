@@ -70,9 +70,10 @@ class Sample:
 
     def replay(self, controller: str) -> str:
         p = self.params()
-        sets = " ".join(f"--set {n}={_dotted(p, n):.6g}" for n, r in RANGES.items() if r[0] == "param")
-        return (f"wetclutch launch --out replay-{self.index} --controller {controller} --t-ref {self.values['t_ref']:.6g} "
-                f"--oil-temp {self.values['oil_temp_C']:.6g} --seed {self.seed} --noise-scale {self.values['noise_scale']:.6g} {sets}")
+        # full precision: a launch with stick/slip events is sensitive to the last digits
+        sets = " ".join(f"--set {n}={_dotted(p, n)!r}" for n, r in RANGES.items() if r[0] == "param")
+        return (f"wetclutch launch --out replay-{self.index} --controller {controller} --t-ref {self.values['t_ref']!r} "
+                f"--oil-temp {self.values['oil_temp_C']!r} --seed {self.seed} --noise-scale {self.values['noise_scale']!r} {sets}")
 
 
 def _dotted(p: Params, name: str) -> float:

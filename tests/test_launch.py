@@ -1,0 +1,104 @@
+"""Closed-loop launches: the controller against the requirements, the loop's plumbing, the baseline."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from wetclutch import control, launch, metrics
+from wetclutch.errors import WetclutchError
+from wetclutch.params import Params
+
+
+@pytest.fixture(scope="module")
+def nominal():
+    return launch.simulate(Params(), "launch", launch.Conditions(t_ref=100.0, oil_temp_C=85.0))
+
+
+@pytest.mark.parametrize("temp", [41.0, 85.0])
+@pytest.mark.parametrize("t_ref", [50.0, 150.0])
+def test_nominal_launches_meet_the_requirements(temp, t_ref):
+    res = launch.simulate(Params(), "launch", launch.Conditions(t_ref=t_ref, oil_temp_C=temp))
+    s = res.summary
+    assert s["requirements"] == {"steady_state_error": True, "response_time": True, "robustness": True}, s
+    assert s["t_sync_s"] is not None and s["t_sync_s"] > 1.5
+
+
+def test_the_design_beats_the_plain_pi_baseline(nominal):
+    base = launch.simulate(Params(), "pi", launch.Conditions(t_ref=100.0, oil_temp_C=85.0))
+    assert base.summary["overshoot_pct"] > 3 * nominal.summary["overshoot_pct"]
+    assert base.summary["t95_s"] > nominal.summary["t95_s"]
+
+
+def test_signals_carry_the_rig_channels_request_and_input(nominal):
+    sig = nominal.signals
+    assert list(sig.columns) == ["time", *launch.CHANNELS, "t_ref", "u"]
+    assert np.all((sig.u >= 0.2) & (sig.u <= 5.0))  # within the rig's DC input range
+    assert np.all(sig.t_ref[sig.time < 1.0] == 0.0) and np.all(sig.t_ref[sig.time >= 1.0] == 100.0)
+    # the run stops t_after after the final lock
+    assert sig.time.iloc[-1] == pytest.approx(nominal.summary["t_sync_s"] + 0.5, abs=5e-3)
+
+
+def test_without_noise_the_loop_measures_the_truth():
+    res = launch.simulate(Params(), "launch", launch.Conditions(t_ref=80.0, noise=False, t_max=2.0))
+    np.testing.assert_allclose(res.signals.T_r, res.truth.T_r, atol=1e-5)
+    np.testing.assert_allclose(res.signals.p_clutch, res.truth.p_clutch, atol=1e-6)
+
+
+def test_slip_energy_is_the_integral_of_clutch_power(nominal):
+    tr = nominal.truth
+    power = tr.T_c * tr.slip
+    energy = float(np.sum(0.5 * (power[1:].to_numpy() + power[:-1].to_numpy()) * np.diff(tr.time)))
+    assert nominal.summary["slip_energy_J"] == pytest.approx(energy, rel=0.01)
+
+
+def test_same_seed_same_launch_other_seed_other_noise():
+    c = launch.Conditions(t_ref=60.0, t_max=1.6, seed=3)
+    a = launch.simulate(Params(), "launch", c, nominal=metrics.Response.empty())
+    b = launch.simulate(Params(), "launch", c, nominal=metrics.Response.empty())
+    d = launch.simulate(Params(), "launch", launch.Conditions(t_ref=60.0, t_max=1.6, seed=4), nominal=metrics.Response.empty())
+    pd.testing.assert_frame_equal(a.signals, b.signals)
+    assert not np.allclose(a.signals.T_r, d.signals.T_r)
+
+
+def test_ramp_and_file_profiles(tmp_path):
+    t = np.arange(0.0, 2.0, 1e-3)
+    ramp = launch.reference(launch.Conditions(t_ref=90.0, profile="ramp"), t)
+    assert ramp[t < 1.0].max() == 0.0
+    assert ramp[np.searchsorted(t, 1.0 + launch.RAMP_TIME / 2)] == pytest.approx(45.0, rel=0.01)
+    f = tmp_path / "profile.csv"
+    f.write_text("time,t_ref\n0,0\n0.5,120\n")
+    ref = launch.reference(launch.Conditions(profile=str(f)), t)
+    assert ref[np.searchsorted(t, 1.25)] == pytest.approx(60.0, rel=0.01)
+
+
+@pytest.mark.parametrize("content", ["time,torque\n0,1\n1,2\n", "time,t_ref\n0,1\n0,2\n", "time,t_ref\n0,nan\n1,2\n",
+                                     "time,t_ref\n0,1\n1,5000\n", "\x00\x01garbage"])
+def test_bad_profile_files_are_one_line_errors(tmp_path, content):
+    f = tmp_path / "bad.csv"
+    f.write_text(content)
+    with pytest.raises(WetclutchError) as e:
+        launch.reference(launch.Conditions(profile=str(f)), np.arange(0.0, 2.0, 1e-3))
+    assert "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("kwargs, field", [({"t_ref": -5.0}, "--t-ref"), ({"oil_temp_C": 400.0}, "--oil-temp"),
+                                           ({"profile": "zigzag"}, "--profile"), ({"noise_scale": -1.0}, "--noise-scale")])
+def test_bad_conditions_name_the_field(kwargs, field):
+    with pytest.raises(WetclutchError, match=field):
+        launch.Conditions(**kwargs).checked()
+
+
+def test_inverse_map_inverts_a_known_curve():
+    v = control.MAP_VOLTS
+    p = (0.41 * v**2 + 0.29 * v + 0.20) * 1e5  # the study's static curve, bar -> Pa
+    table = control.inverse_map(p[None, :])[0]
+    target = control.MAP_PRESSURES
+    inside = (target >= p[0]) & (target <= p[-1])
+    exact = (-0.29 + np.sqrt(0.29**2 - 4 * 0.41 * (0.20 - target[inside] / 1e5))) / (2 * 0.41)
+    np.testing.assert_allclose(table[inside], exact, atol=0.02)  # linear interpolation between 0.3 V points
+    assert np.all(np.diff(table) >= 0)
+
+
+def test_unknown_controller_is_refused():
+    with pytest.raises(WetclutchError, match="unknown controller"):
+        launch.simulate(Params(), "bang-bang", launch.Conditions(t_max=1.6))
