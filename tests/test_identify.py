@@ -106,14 +106,19 @@ def test_valve_gain_matches_the_true_static_pressures(identified, rig_data):
     est = identified.estimates["valve_gain"]
     truth = results["stair"].truth
     fit = identified.estimates["valve_gain_poly"]
+    us, ps = [], []
     for u, _ in fit.extra["points"]:
         # the noise-free pressure at the end of each dwell at this duty
         at = truth[(np.abs(truth.u - u) < 1e-9)]
         ends = at.time.to_numpy()[np.flatnonzero(np.diff(at.time.to_numpy(), append=np.inf) > 0.01)]
         for t_end in ends:
-            p_true = truth.p_clutch.to_numpy()[np.searchsorted(truth.time, t_end - 0.05)] / 1e5
-            p_fit = est.value["slope_bar_per_duty"] * u + est.value["offset_bar"]
-            assert abs(p_fit - p_true) < 0.15
+            us.append(u)
+            ps.append(truth.p_clutch.to_numpy()[np.searchsorted(truth.time, t_end - 0.05)] / 1e5)
+    # the line through the measured dwells is the line through the true ones (the valve's
+    # curvature and hysteresis are the model's; the estimator must not add to them)
+    slope, offset = np.polyfit(us, ps, 1)
+    assert est.value["slope_bar_per_duty"] == pytest.approx(slope, rel=0.05)
+    assert est.value["offset_bar"] == pytest.approx(offset, abs=0.05)
     assert est.value["slope_bar_per_duty"] > 0 and est.se["slope_bar_per_duty"] > 0
 
 
