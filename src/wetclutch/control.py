@@ -317,7 +317,11 @@ class LaunchGains:
     theta0 : float
         Friction factor assumed until it is measured: on the high side of the
         spread, so that a grippy unit does not overshoot before the estimate
-        catches up (a slippery one is a little slower instead).
+        catches up (a slippery one is a little slower instead). 1.4 rather than
+        1.2: with the pressure now rising without staircases, the first rise
+        reaches the plates faster than the estimate (10 ms) settles, and at low
+        CVT ratios (high torque gain onto the axle) the overshoot then set the
+        robustness failures.
     dither_amp, dither_hz : float
         Square-wave dither on the valve input (V, Hz) against stem stick-slip,
         before the request and while the fill completes: smaller than the
@@ -344,7 +348,7 @@ class LaunchGains:
     ki_t: float = 8.0
     tau_ref: float = 0.03
     tau_theta: float = 0.01
-    theta0: float = 1.2
+    theta0: float = 1.4
     dither_amp: float = 0.05
     kp_hold: float = 0.05e-5
     ki_hold: float = 2.0e-5
