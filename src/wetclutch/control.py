@@ -42,8 +42,29 @@ over a flat record of its settings (``ctrl``) and its own state vector
       (efficiency, kiss-point error). The slip in ``mu(slip)`` comes from the
       primary and secondary flywheels, whose speeds are smooth.
     * **Dither.** In DC mode nothing shakes the valve stem, whose friction then
-      makes the pressure stall in steps (the study's reason for PWM). A small
-      square-wave dither on the input (0.05 V at 125 Hz) keeps it moving.
+      makes the pressure stall in steps (the study's reason for PWM); worse, the
+      magnet's hysteresis is a play of some 0.225 V of input, and after each
+      reversal the input has to cross all of it before the force moves: with a
+      pressure integrator slow enough for the hold, the pressure rose in
+      staircases of 20 to 60 ms, which made the response time vary from launch
+      to launch. Once torque is requested the input therefore carries a
+      square-wave dither *wider* than the play (0.3 V at 125 Hz): the iron then
+      follows the mean coil current (the play is dithered out as a backlash is)
+      and the stem never sticks; the feedforward is shifted by the play, since
+      the map was measured on the rising branch and the dithered magnet works
+      on the centre line. The pressure integrator is faster then than in the
+      hold. Before the request (and until the fill is complete) the dither
+      stays small (0.05 V, inside the play): with the stem near its overlap a
+      wide dither pumps oil in, because the supply drives the inflow with
+      several bar and the drain only with the clutch pressure, and the
+      pressure would creep up and slam at contact.
+    * **A request during the fill.** If the request comes before the filtered
+      pressure has reached the hold (cold oil, a long line, a late kiss point),
+      the gentle, lead-limited approach of the hold would crawl; the set point
+      then jumps to ``req_lead`` above the hold so that the valve opens and the
+      fill completes: a jolt at contact is then only the torque arriving. The
+      request itself waits until the fill is complete (latched, so that noise
+      on the filtered pressure cannot stop it again).
     * **Anti-windup.** Both integrators stop when the input saturates in the
       direction that would wind them further (conditional integration), and
       the pressure target is limited to the supply pressure.
@@ -71,14 +92,15 @@ KIND, DT, U_MIN, U_MAX = range(4)
 LAUNCH, PI = 0, 1
 # launch controller
 (P_KISS, HOLD_OFFSET, FILL_EXIT, A_P, RATIO, ETA, MU2, MU1, MU0, F_KNEE, KP_P, KI_P, KP_T, KI_T, P_MAX, TAU_REF,
- HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, HOLD_LEAD, FILL_EXIT_COLD, FF_T0, FF_DT, FF_NT, FF_P0, FF_DP, FF_NP) = range(4, 36)
-FF_TABLE = 36  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
+ HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, HOLD_LEAD, FILL_EXIT_COLD, FF_T0, FF_DT, FF_NT, FF_P0, FF_DP, FF_NP,
+ KI_HOLD, DITHER_AMP_T, DITHER_HALF_T, FF_SHIFT_T, REQ_LEAD) = range(4, 41)
+FF_TABLE = 41  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
 # PI baseline (shares the slots after the common fields)
 KP_B, KI_B = 4, 5
 
 # --- controller state
-CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF = range(10)
-N_CS = 10
+CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED = range(11)
+N_CS = 11
 FILL, HOLD, TORQUE, LOCKUP = 0, 1, 2, 3
 SYNC_SLIP = 2.0  # rad/s: measured slip below which the clutch counts as synchronised
 
@@ -169,7 +191,10 @@ def _launch(ctrl, cs, meas, t_ref):
         # fast, underdamped pressure response would jolt the driveline
         # until the fill is complete (cold oil, long line) the request waits, and the
         # integrator with it: it would only wind up against a clutch that cannot answer yet
-        gated = cs[CS_PF] < p_hold
+        # (latched: once filled, noise on the filtered pressure must not stop the request again)
+        gated = cs[CS_FILLED] == 0.0 and cs[CS_PF] < p_hold
+        if not gated:
+            cs[CS_FILLED] = 1.0
         if not gated:
             cs[CS_REF] += (t_ref - cs[CS_REF]) * dt / (ctrl[TAU_REF] + dt)
         r = cs[CS_REF]
@@ -189,7 +214,9 @@ def _launch(ctrl, cs, meas, t_ref):
         p_set = _pressure_target(ctrl, r, slip, th) + cs[CS_ZT] + ctrl[KP_T] * sens * e_t
         p_set = min(max(p_set, p_hold), ctrl[P_MAX])
         if gated:
-            p_set = min(p_set, cs[CS_PF] + ctrl[HOLD_LEAD])  # finish the fill gently
+            # finish the fill; with the request there a jolt at contact is wanted rather than
+            # feared, so the set point may lead the measured pressure further than in the hold
+            p_set = p_hold + ctrl[REQ_LEAD]
         u_prev = cs[CS_U]
         wind_up = gated or (u_prev >= ctrl[U_MAX] and e_t > 0.0) or (u_prev <= ctrl[U_MIN] and e_t < 0.0)
         if not wind_up:
@@ -197,25 +224,35 @@ def _launch(ctrl, cs, meas, t_ref):
     e_p = p_set - p
     # in the hold the plates have just touched; an overshoot there would leave the
     # stem in its overlap with the pressure trapped high, so push back harder
-    kp = ctrl[KP_HOLD] if phase == HOLD else ctrl[KP_P]
-    u = _table(ctrl, temp, p_set) + cs[CS_ZP] + kp * e_p
+    # (a request still waiting for the fill counts as hold here: its stem sits near
+    # the overlap, where a wide dither would pump oil in and slam the pressure up)
+    hold = phase == HOLD or cs[CS_FILLED] == 0.0
+    kp = ctrl[KP_HOLD] if hold else ctrl[KP_P]
+    ki = ctrl[KI_HOLD] if hold else ctrl[KI_P]
+    # with the torque dither wider than the magnet's play the iron follows the mean
+    # current, not the rising branch the map was measured on: shift the map by the play
+    shift = 0.0 if hold else ctrl[FF_SHIFT_T]
+    u = _table(ctrl, temp, p_set) - shift + cs[CS_ZP] + kp * e_p
     if u > ctrl[U_MAX]:
         u = ctrl[U_MAX]
         if e_p < 0.0:
-            cs[CS_ZP] += ctrl[KI_P] * e_p * dt
+            cs[CS_ZP] += ki * e_p * dt
     elif u < ctrl[U_MIN]:
         u = ctrl[U_MIN]
         if e_p > 0.0:
-            cs[CS_ZP] += ctrl[KI_P] * e_p * dt
+            cs[CS_ZP] += ki * e_p * dt
     else:
-        cs[CS_ZP] += ctrl[KI_P] * e_p * dt
+        cs[CS_ZP] += ki * e_p * dt
     cs[CS_U] = u
     # a square-wave dither on top: it keeps the valve stem from sticking (the DC
     # drive lacks the dither that PWM gives); the integrators do not see it
     k = int(cs[CS_K])
     cs[CS_K] = k + 1
-    half = max(int(ctrl[DITHER_HALF]), 1)
-    d = ctrl[DITHER_AMP] if (k // half) % 2 == 0 else -ctrl[DITHER_AMP]
+    if hold:
+        amp, half = ctrl[DITHER_AMP], max(int(ctrl[DITHER_HALF]), 1)
+    else:
+        amp, half = ctrl[DITHER_AMP_T], max(int(ctrl[DITHER_HALF_T]), 1)
+    d = amp if (k // half) % 2 == 0 else -amp
     return min(max(u + d, ctrl[U_MIN]), ctrl[U_MAX])
 
 
@@ -253,12 +290,20 @@ class LaunchGains:
     hold_rate : float
         Rate at which the pressure set point then approaches the hold pressure, Pa/s.
     kp_p, ki_p : float
-        Pressure PI: V/Pa and V/(Pa s).
-    kp_hold : float
-        Proportional pressure gain while holding at the kiss point, V/Pa.
+        Pressure PI once the torque is requested: V/Pa and V/(Pa s).
+    kp_hold, ki_hold : float
+        Pressure PI while holding at the kiss point (and while a request waits for
+        the fill), V/Pa and V/(Pa s): gentler than after the request, since a
+        faster integrator there winds the valve open against the stroking piston
+        and slams the pressure up at contact.
     hold_lead : float
         While approaching the hold, the set point stays at most this far above
         the measured pressure, Pa.
+    req_lead : float
+        A request that comes before the fill is complete asks for this much
+        above the hold pressure, Pa, until the filtered pressure reaches the
+        hold: the torque is wanted now, so the valve may open further than in
+        the gentle hold approach (a slam at contact only brings the torque on).
     dip, dip_time : float
         After the fill, the input drops this far (V) below the hold input for
         this long (s), to bring the magnet onto its rising hysteresis branch.
@@ -272,9 +317,25 @@ class LaunchGains:
     theta0 : float
         Friction factor assumed until it is measured: on the high side of the
         spread, so that a grippy unit does not overshoot before the estimate
-        catches up (a slippery one is a little slower instead).
+        catches up (a slippery one is a little slower instead). 1.4 rather than
+        1.2: with the pressure now rising without staircases, the first rise
+        reaches the plates faster than the estimate (10 ms) settles, and at low
+        CVT ratios (high torque gain onto the axle) the overshoot then set the
+        robustness failures.
     dither_amp, dither_hz : float
-        Square-wave dither on the valve input (V, Hz) against stem stick-slip.
+        Square-wave dither on the valve input (V, Hz) against stem stick-slip,
+        before the request and while the fill completes: smaller than the
+        magnet's play, which swallows it, since near the overlap a wide dither
+        pumps oil in (inflow from the supply is far stronger than drain flow).
+    dither_amp_torque, dither_hz_torque : float
+        The dither once the clutch is filled and torque is requested (V, Hz):
+        wider than the magnet's play (about 0.225 V of input), so that the iron
+        follows the mean coil current and neither the play nor the stem
+        friction can stall the pressure in steps.
+    ff_shift_torque : float
+        Fraction of the design valve's play (``I_hyst / g_current``, V) taken
+        off the feedforward under the wide dither: the map was measured on the
+        rising hysteresis branch, the dithered magnet works on the centre line.
     """
 
     hold_offset: float = 0.05e5
@@ -282,14 +343,19 @@ class LaunchGains:
     fill_exit_cold: float = 0.05e5
     hold_rate: float = 1.0e5
     kp_p: float = 0.05e-5
-    ki_p: float = 2.0e-5
+    ki_p: float = 5.0e-5
     kp_t: float = 0.0
     ki_t: float = 8.0
     tau_ref: float = 0.03
     tau_theta: float = 0.01
-    theta0: float = 1.2
+    theta0: float = 1.4
     dither_amp: float = 0.05
     kp_hold: float = 0.05e-5
+    ki_hold: float = 2.0e-5
+    dither_amp_torque: float = 0.3
+    dither_hz_torque: float = 125.0
+    ff_shift_torque: float = 1.0
+    req_lead: float = 0.2e5
     dip: float = 0.5
     hold_lead: float = 0.01e5
     dip_time: float = 0.015

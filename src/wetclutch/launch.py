@@ -206,6 +206,9 @@ def controller_record(name: str, params: Params, gains: Any = None, dt: float = 
         r[control.DITHER_AMP], r[control.DITHER_HALF] = g.dither_amp, round(0.5 / (g.dither_hz * dt))
         r[control.KP_HOLD], r[control.HOLD_LEAD], r[control.FILL_EXIT_COLD] = g.kp_hold, g.hold_lead, g.fill_exit_cold
         r[control.DIP], r[control.DIP_N] = g.dip, round(g.dip_time / dt)
+        r[control.KI_HOLD], r[control.REQ_LEAD] = g.ki_hold, g.req_lead
+        r[control.DITHER_AMP_T], r[control.DITHER_HALF_T] = g.dither_amp_torque, round(0.5 / (g.dither_hz_torque * dt))
+        r[control.FF_SHIFT_T] = g.ff_shift_torque * params.valve.I_hyst / params.valve.g_current
         T, P = control.MAP_TEMPS, control.MAP_PRESSURES
         r[control.FF_T0], r[control.FF_DT], r[control.FF_NT] = T[0], T[1] - T[0], T.size
         r[control.FF_P0], r[control.FF_DP], r[control.FF_NP] = P[0], P[1] - P[0], P.size

@@ -97,9 +97,9 @@ def samples(n: int, seed: int, corners: bool = True) -> list[Sample]:
     return out
 
 
-def nominal_grid(controller: str, profile: str = "step") -> tuple[np.ndarray, np.ndarray]:
+def nominal_grid(controller: str, profile: str = "step", gains: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """t95 and overshoot of the nominal launch at :data:`NOMINAL_LEVELS` (interpolated in between)."""
-    rows = [launch.nominal_response(controller, launch.Conditions(t_ref=float(lv), profile=profile))
+    rows = [launch.nominal_response(controller, launch.Conditions(t_ref=float(lv), profile=profile), gains)
             for lv in NOMINAL_LEVELS]
     return np.array([r.t95_s for r in rows]), np.array([r.overshoot_pct for r in rows])
 
@@ -110,10 +110,14 @@ def _nominal_at(grid: tuple[np.ndarray, np.ndarray], t_ref: float) -> metrics.Re
     return replace(metrics.Response.empty(), t95_s=t95, overshoot_pct=ovs)
 
 
-def run_sample(sample: Sample, controller: str, grid: tuple[np.ndarray, np.ndarray], profile: str = "step") -> dict[str, Any]:
-    """Launch on one sample; its values, metrics and pass/fail (failures of the simulation recorded, not raised)."""
+def run_sample(sample: Sample, controller: str, grid: tuple[np.ndarray, np.ndarray], profile: str = "step",
+               gains: Any = None) -> dict[str, Any]:
+    """Launch on one sample; its values, metrics and pass/fail (failures of the simulation recorded, not raised).
+
+    ``gains``: the controller's settings (None: its defaults), for tuning experiments.
+    """
     try:
-        res = launch.simulate(sample.params(), controller, sample.conditions(profile),
+        res = launch.simulate(sample.params(), controller, sample.conditions(profile), gains=gains,
                               nominal=_nominal_at(grid, sample.values["t_ref"]))
         s = res.summary
         metrics_ = {k: s[k] for k in ("steady_state_error_pct", "t95_s", "overshoot_pct", "jerk_max", "slip_energy_J", "t_sync_s")}
@@ -128,14 +132,18 @@ def run_sample(sample: Sample, controller: str, grid: tuple[np.ndarray, np.ndarr
 _GRID: tuple[np.ndarray, np.ndarray] | None = None
 
 
-def _worker(args: tuple[Sample, str, str]) -> dict[str, Any]:
+def _worker(args: tuple[Sample, str, str, Any]) -> dict[str, Any]:
     assert _GRID is not None
-    return run_sample(args[0], args[1], _GRID, args[2])
+    return run_sample(args[0], args[1], _GRID, args[2], args[3])
 
 
 def run(n: int = 1000, seed: int = 0, workers: int | None = None, controller: str = "launch", profile: str = "step",
-        corners: bool = True, progress: bool = True) -> dict[str, Any]:
-    """Verify ``controller`` on ``n`` random samples (plus corners); returns the ``verify.json`` content."""
+        corners: bool = True, progress: bool = True, gains: Any = None) -> dict[str, Any]:
+    """Verify ``controller`` on ``n`` random samples (plus corners); returns the ``verify.json`` content.
+
+    ``gains`` replaces the controller's default settings (a :class:`~wetclutch.control.LaunchGains`
+    or :class:`~wetclutch.control.PIGains`), in the samples and in the nominal launches alike.
+    """
     global _GRID
     if n < 0:
         raise WetclutchError(f"--samples must be >= 0 (got {n})")
@@ -147,8 +155,8 @@ def run(n: int = 1000, seed: int = 0, workers: int | None = None, controller: st
     cases = samples(n, seed, corners)
     # the design's feedforward table and the nominal responses, made once here and
     # inherited by the forked workers
-    _GRID = nominal_grid(controller, profile)
-    jobs = [(c, controller, profile) for c in cases]
+    _GRID = nominal_grid(controller, profile, gains)
+    jobs = [(c, controller, profile, gains) for c in cases]
     results: list[dict[str, Any]] = []
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
