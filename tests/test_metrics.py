@@ -83,3 +83,12 @@ def test_robustness_compares_with_nominal():
     assert metrics.requirements(close, nominal)["robustness"]
     assert not metrics.requirements(slow, nominal)["robustness"]
     assert not metrics.requirements(close, metrics.Response.empty())["robustness"]
+
+
+def test_t95_of_a_ramp_request_is_the_lag_behind_it():
+    t = _grid()
+    ref = 100.0 * np.clip((t - T_REQ) / 0.3, 0.0, 1.0)
+    lag = 0.04
+    T_r = 100.0 * np.clip((t - T_REQ - lag) / 0.3, 0.0, 1.0)
+    r = metrics.response(t, T_r, ref, T_REQ, None)
+    assert r.t95_s == pytest.approx(lag, abs=2 * DT)

@@ -15,6 +15,9 @@ static value ``T_ss``
     ``|T_ss - mean(t_ref)| / mean(t_ref) * 100`` over the steady window.
 ``t95_s``
     From the request until ``T_r`` first reaches 95 % of ``T_ss`` (inf if never).
+    For a request that is not a step (ramp, profile file) the clock starts when the
+    request itself first reaches 95 % of its mean over the steady window, so that
+    the figure is the response's lag, not the profile's own rise time.
 ``overshoot_pct``
     ``(max T_r before t_sync - T_ss) / T_ss * 100``, at least 0; ``T_r`` smoothed
     over :data:`SMOOTH` first, so that sensor noise does not count.
@@ -81,7 +84,9 @@ def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_
     ess = abs(T_ss - ref) / ref * 100.0
     after = t >= t_req
     reached = np.flatnonzero(after & (T_r >= 0.95 * T_ss))
-    t95 = float(t[reached[0]] - t_req) if reached.size and T_ss > 0 else np.inf
+    asked = np.flatnonzero(after & (t_ref >= 0.95 * ref))
+    t_start = float(t[asked[0]]) if asked.size else t_req
+    t95 = float(t[reached[0]] - t_start) if reached.size and T_ss > 0 else np.inf
     slip = after & (t < t_end)
     y = _smooth(t, T_r)
     overshoot = max(0.0, (float(np.max(y[slip])) - T_ss) / T_ss * 100.0) if T_ss > 0 else np.nan
