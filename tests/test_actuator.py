@@ -40,7 +40,7 @@ def test_fill_phases_in_order(pwm_step):
 def test_static_gain_is_monotone_in_the_input():
     p = wc.Params()
     v = [0.5, 1.0, 1.5, 2.0, 3.0, 4.0]
-    stat = [calibration._settled(p, Step(1.0, 0.2, x), False, "clutch", 85.0, 4.0) for x in v]
+    stat = [clutch.static_pressure(p, Step(1.0, 0.2, x), temp_C=85.0, t_end=4.0) for x in v]
     assert np.all(np.diff(stat) > 0)
 
 
@@ -182,9 +182,9 @@ def test_seal_leak_is_a_gap_in_series_with_an_orifice():
 def test_turbulent_seal_leak_makes_the_static_pressure_rise_with_temperature():
     """With the seal rings' orifice the leak, lost in the viscous feed line, lowers the cold pressure most."""
     p = wc.load_params(overrides={"hydraulics.leak_85C": 8e-10, "hydraulics.seal_orifice": 6.3e-8})
-    cold, warm = (calibration._settled(p, Step(1.0, 0.0, 0.2), True, "clutch", temp, 4.0) for temp in (20.0, 85.0))
+    cold, warm = (clutch.static_pressure(p, Step(1.0, 0.0, 0.2), pwm=True, temp_C=temp, t_end=4.0) for temp in (20.0, 85.0))
     assert warm - cold > 1.5e5
     # the default (laminar seal gap only): the force balance, whatever the viscosity
     d = wc.Params()
-    cold0, warm0 = (calibration._settled(d, Step(1.0, 0.0, 0.2), True, "clutch", temp, 4.0) for temp in (20.0, 85.0))
+    cold0, warm0 = (clutch.static_pressure(d, Step(1.0, 0.0, 0.2), pwm=True, temp_C=temp, t_end=4.0) for temp in (20.0, 85.0))
     assert abs(warm0 - cold0) < 0.2e5

@@ -125,6 +125,8 @@ def test_launch_writes_signals_summary_plot(tmp_path):
         (["launch", "--profile", "nonexistent.csv"], "--profile"),
         (["launch", "--set", "friction.mu_scale=0"], "friction.mu_scale"),
         (["verify", "--samples", "-4"], "--samples"),
+        (["verify", "--workers", "0"], "--workers"),
+        (["report", "--baseline-samples", "-1"], "--baseline-samples"),
     ],
 )
 def test_launch_and_verify_bad_input(tmp_path, args, fragment):

@@ -50,4 +50,4 @@ def test_bad_options():
     with pytest.raises(WetclutchError, match="--samples"):
         verify.run(-1, progress=False)
     with pytest.raises(WetclutchError, match="--workers"):
-        verify.run(1, workers=-2, progress=False)
+        verify.run(1, workers=0, progress=False)

@@ -50,12 +50,6 @@ class Figure:
         return bool(np.isfinite(self.error) and abs(self.error) <= self.tolerance)
 
 
-def _settled(p: Params, u, pwm: bool, config: str, temp: float, t_end: float, window: float = 1.0) -> float:
-    rn = clutch.build(p, u, pwm=pwm, config=config, temp_C=temp)
-    tr = integrate(rn.network, t_end, dt_out=1e-3)
-    return float(np.mean(tr.x[tr.t > t_end - window, rn.i_pressure]))
-
-
 def onset(p: Params, duty: float, temp: float, t_end: float = 3.0) -> tuple[float, float]:
     """(dead time s, pressure Pa at onset) for a PWM step from 0 to ``duty`` at ``T_STEP``."""
     rn = clutch.build(p, Step(1.0, 0.0, duty), pwm=True, temp_C=temp)
@@ -93,7 +87,7 @@ def run(params: Params | None = None) -> list[Figure]:
         figs.append(Figure(f"dead time pdc {duty:g} at {temp:g} C", pub, dt, dt / pub - 1.0, 0.2, unit="s"))
 
     v = np.linspace(1.0, 4.0, 7)
-    sim = np.array([_settled(p, Step(1.0, 0.2, x), False, "clutch", 85.0, 4.0) for x in v]) / 1e5
+    sim = np.array([clutch.static_pressure(p, Step(1.0, 0.2, x), temp_C=85.0, t_end=4.0) for x in v]) / 1e5
     pub = 0.41 * v**2 + 0.29 * v + 0.20
     err = sim / pub - 1.0
     figs.append(Figure("whole clutch static p vs DC input, 85 C (1..4 V)", pub.round(3).tolist(), sim.round(3).tolist(),
@@ -115,7 +109,7 @@ def run(params: Params | None = None) -> list[Figure]:
                        0.0 if width > 0.02 else np.inf, 0.0, "absolute", "bar"))
 
     temps = np.array([20.0, 41.0, 60.0, 85.0])
-    sim = np.array([_settled(p, Step(1.0, 0.0, 0.2), True, "clutch", T, 4.0) for T in temps]) / 1e5
+    sim = np.array([clutch.static_pressure(p, Step(1.0, 0.0, 0.2), pwm=True, temp_C=T, t_end=4.0) for T in temps]) / 1e5
     pub = 4.8e-4 * temps**2 + 4.1e-4 * temps + 4.2
     err = sim / pub - 1.0
     figs.append(Figure("whole clutch static p vs oil temperature at pdc 0.2 (20..85 C)", pub.round(3).tolist(),

@@ -118,3 +118,18 @@ def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str =
     net.brake("stem_friction", stem, Const(v.F_friction))
     net.actuator(stem, spring, ci, u, actuator_record(params, temp, config), pwm=pwm, pwm_freq=v.pwm_freq)
     return RigNetwork(net, config, temp)
+
+
+def static_pressure(params: Params, u: Signal | float, *, pwm: bool = False, config: str = "clutch",
+                    temp_C: float | None = None, t_end: float = 3.0, window: float = 1.0,
+                    dt_out: float = 1e-3) -> float:
+    """Static clutch pressure (Pa) for input ``u``: the mean over the last ``window`` s of a run to ``t_end``.
+
+    Averaged rather than sampled, because a DC-driven valve hunts a little by stem
+    stick-slip and a PWM-driven one ripples.
+    """
+    from .network import integrate
+
+    rn = build(params, u, pwm=pwm, config=config, temp_C=temp_C)
+    tr = integrate(rn.network, t_end, dt_out=dt_out)
+    return float(np.mean(tr.x[tr.t >= t_end - window, rn.i_pressure]))

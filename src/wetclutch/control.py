@@ -76,7 +76,7 @@ over a flat record of its settings (``ctrl``) and its own state vector
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -85,7 +85,6 @@ _jit = njit(cache=True, error_model="numpy", _nrt=False)
 
 # --- measured channels, in the order the closed loop passes them
 M_P, M_TR, M_WP, M_W1, M_WR, M_WS, M_TEMP = range(7)
-N_MEAS = 7
 
 # --- controller record: common fields
 KIND, DT, U_MIN, U_MAX = range(4)
@@ -187,15 +186,14 @@ def _launch(ctrl, cs, meas, t_ref):
         # stroke pressure opens wide and slams the pressure up when the plates touch
         p_set = min(cs[CS_PSET], cs[CS_PF] + ctrl[HOLD_LEAD])
     else:
-        # the request through a first-order prefilter: a torque step through the valve's
-        # fast, underdamped pressure response would jolt the driveline
         # until the fill is complete (cold oil, long line) the request waits, and the
         # integrator with it: it would only wind up against a clutch that cannot answer yet
         # (latched: once filled, noise on the filtered pressure must not stop the request again)
         gated = cs[CS_FILLED] == 0.0 and cs[CS_PF] < p_hold
         if not gated:
             cs[CS_FILLED] = 1.0
-        if not gated:
+            # the request through a first-order prefilter: a torque step through the valve's
+            # fast, underdamped pressure response would jolt the driveline
             cs[CS_REF] += (t_ref - cs[CS_REF]) * dt / (ctrl[TAU_REF] + dt)
         r = cs[CS_REF]
         e_t = r - meas[M_TR]
@@ -210,8 +208,9 @@ def _launch(ctrl, cs, meas, t_ref):
             theta = min(max(meas[M_TR] / t_model, 0.5), 2.0)
             cs[CS_THETA] += (theta - cs[CS_THETA]) * dt / (ctrl[TAU_THETA] + dt)
         th = cs[CS_THETA]
-        sens = _pressure_target(ctrl, r + 1.0, slip, th) - _pressure_target(ctrl, r, slip, th)  # Pa per N m
-        p_set = _pressure_target(ctrl, r, slip, th) + cs[CS_ZT] + ctrl[KP_T] * sens * e_t
+        p_r = _pressure_target(ctrl, r, slip, th)
+        sens = _pressure_target(ctrl, r + 1.0, slip, th) - p_r  # Pa per N m
+        p_set = p_r + cs[CS_ZT] + ctrl[KP_T] * sens * e_t
         p_set = min(max(p_set, p_hold), ctrl[P_MAX])
         if gated:
             # finish the fill; with the request there a jolt at contact is wanted rather than
@@ -378,13 +377,6 @@ class PIGains:
 
 CONTROLLERS = ("launch", "pi")
 
-
-def gains_fields(name: str) -> tuple[str, ...]:
-    """Names of a controller's settings (for ``--set control.NAME=value``)."""
-    cls = LaunchGains if name == "launch" else PIGains
-    return tuple(f.name for f in fields(cls))
-
-
 #: oil temperatures (C) and input voltages (V) at which the feedforward map is tabulated
 MAP_TEMPS = np.array([20.0, 40.0, 60.0, 80.0, 100.0])
 MAP_VOLTS = np.linspace(0.2, 5.0, 17)
@@ -395,18 +387,12 @@ def static_map(params, temps: np.ndarray = MAP_TEMPS, volts: np.ndarray = MAP_VO
     """Static clutch pressure (Pa) vs DC input, shape (len(temps), len(volts)), from the model.
 
     Each point is a constant-input run of the clutch configuration, averaged over
-    its last second (the DC valve hunts a little by stem stick-slip).
+    its last second (:func:`wetclutch.clutch.static_pressure`).
     """
     from . import clutch
-    from .network import integrate
 
-    out = np.zeros((temps.size, volts.size))
-    for i, temp in enumerate(temps):
-        for j, v in enumerate(volts):
-            rn = clutch.build(params, float(v), pwm=False, config="clutch", temp_C=float(temp))
-            tr = integrate(rn.network, 3.0, dt_out=1e-2)
-            out[i, j] = float(np.mean(tr.x[tr.t >= 2.0, rn.i_pressure]))
-    return out
+    return np.array([[clutch.static_pressure(params, float(v), temp_C=float(temp), t_end=3.0, dt_out=1e-2)
+                      for v in volts] for temp in temps])
 
 
 def inverse_map(p_static: np.ndarray, volts: np.ndarray = MAP_VOLTS, pressures: np.ndarray = MAP_PRESSURES) -> np.ndarray:

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from . import launch, metrics, verify
+from .errors import WetclutchError
 from .output import atomic_dir, write_json
 from .params import Params
 
@@ -84,6 +85,12 @@ def main_job(out: str | Path, samples: int = 1000, baseline_samples: int = 200, 
     """The main job: nominal launches (design vs baseline), verification of both, one report."""
     from .plotting import plot_launch
 
+    # refuse bad options before minutes of launches, not after
+    for name, n in (("--samples", samples), ("--baseline-samples", baseline_samples)):
+        if n < 0:
+            raise WetclutchError(f"{name} must be >= 0 (got {n})")
+    if workers is not None and workers < 1:
+        raise WetclutchError(f"--workers must be >= 1 (got {workers})")
     p = Params()
     launches = []
     for temp in (41.0, 85.0):

@@ -149,9 +149,9 @@ def run(n: int = 1000, seed: int = 0, workers: int | None = None, controller: st
         raise WetclutchError(f"--samples must be >= 0 (got {n})")
     if controller not in launch.control.CONTROLLERS:
         raise WetclutchError(f"unknown controller '{controller}'")
-    workers = workers or os.cpu_count() or 1
-    if workers < 1:
+    if workers is not None and workers < 1:
         raise WetclutchError(f"--workers must be >= 1 (got {workers})")
+    workers = workers or os.cpu_count() or 1
     cases = samples(n, seed, corners)
     # the design's feedforward table and the nominal responses, made once here and
     # inherited by the forked workers
