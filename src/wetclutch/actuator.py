@@ -56,7 +56,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .oil import _k_eff_j as effective_bulk_modulus
+from .oil import _compliance_j as oil_compliance
 
 # layout of the flat actuator record (indices into ``act``)
 (
@@ -115,7 +115,7 @@ def piston_position(p, act):
         return 0.0
     if p >= act[P_CONTACT]:
         return act[X_CONTACT]
-    return act[A_P] * (p - act[P_PRE]) / act[K_RESET]
+    return act[A_P] / act[K_RESET] * (p - act[P_PRE])
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
@@ -136,7 +136,7 @@ def magnet_force(i_m, act):
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
 def play_rate(cur, cur_dot, i_m, r):
     """dI_m/dt of the smoothed play (Duhem form, see the module docstring) of half-width ``r`` > 0."""
-    z = (cur - i_m) / r if cur_dot > 0.0 else (i_m - cur) / r
+    z = (cur - i_m if cur_dot > 0.0 else i_m - cur) * (1.0 / r)
     if z <= 0.0:
         return 0.0
     # I_m never outruns I: capping keeps the rate bounded even where a trial stage of the
@@ -163,10 +163,11 @@ def seal_leak(p, act):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def evaluate(x, act, u, ext, dx):
+def evaluate(x, act, u, ext, dx, full=True):
     """Write dI/dt and dp/dt into ``dx``; return (force on the stem, clutch normal force).
 
     ``u`` is the input (V in DC mode; ignored in PWM mode, where ``ext`` holds the level).
+    With ``full`` False only the forces are wanted: the pressure derivative is skipped.
     """
     i0 = int(act[STATE])
     cur = x[i0]
@@ -182,7 +183,8 @@ def evaluate(x, act, u, ext, dx):
             v = act[V_SUP]
         elif v < 0.0:
             v = -act[R_FW] * cur  # output transistor blocks: freewheel
-    cur_dot = (v - act[R_COIL] * cur) / act[L_COIL]
+    # constant reciprocals: the divide then runs off the dependency chain of the state
+    cur_dot = (v - act[R_COIL] * cur) * (1.0 / act[L_COIL])
     dx[i0] = cur_dot
     # ---- magnetisation: a play on the current (hysteresis); none: I_m tracks I exactly
     if act[I_HYST] > 0.0:
@@ -191,37 +193,44 @@ def evaluate(x, act, u, ext, dx):
     else:
         i_m = cur
         dx[i0 + 4] = cur_dot
-    # ---- valve flows
+    # ---- valve flows (written for few square roots and divisions: this runs in every stage)
     xs = x[int(act[STEM_SPRING])]
     o_sup = min(max(xs - act[OVERLAP], 0.0), act[X_PORT])
     o_drn = min(max(-xs - act[OVERLAP], 0.0), act[X_PORT])
+    pp = max(p, 0.0)
     q_in = 0.0
     if o_sup > 0.0:
-        # stem port and feed restriction (turbulent, a sqrt(dp); in series they combine as
+        # stem port and feed restriction (turbulent, Q = a sqrt(dp); in series they combine as
         # 1/a^2 = 1/a_port^2 + 1/a_feed^2) in series with the laminar supply line (R_line Q)
-        a = act[CDW] * o_sup * np.sqrt(2.0 / act[RHO])
-        if act[A_FEED] > 0.0:
-            a = a * act[A_FEED] / np.sqrt(a * a + act[A_FEED] * act[A_FEED])
+        cw = act[CDW] * o_sup
+        a2 = cw * cw * 2.0 / act[RHO]
+        af2 = act[A_FEED] * act[A_FEED]
+        if af2 > 0.0:
+            a2 = a2 * af2 / (a2 + af2)
         dp = act[P_SUP] - p
-        a2r = a * a * act[R_LINE]
-        q_in = 0.5 * (-a2r + np.sqrt(a2r * a2r + 4.0 * a * a * abs(dp)))
+        a2r = a2 * act[R_LINE]
+        q_in = 0.5 * (np.sqrt(a2r * a2r + 4.0 * a2 * abs(dp)) - a2r)
         if dp < 0.0:
             q_in = -q_in
-    q_drn = act[CDW] * o_drn * np.sqrt(2.0 * max(p, 0.0) / act[RHO])
-    q_leak = seal_leak(p, act) + act[K_RESTRICT] * np.sqrt(max(p, 0.0))
-    q_rel = act[G_RELIEF] * (p - act[P_RELIEF]) if p > act[P_RELIEF] else 0.0
-    # ---- oil volume behind the valve and the piston's compliance
-    vol = act[V0] + act[A_P] * piston_position(p, act)
-    cap = vol / effective_bulk_modulus(max(p, 0.0), act[K_OIL], act[AIR])
-    if act[P_PRE] < p < act[P_CONTACT]:
-        cap += act[A_P] * act[A_P] / act[K_RESET]
-    dx[i0 + 1] = (q_in - q_drn - q_leak - q_rel) / cap
-    dx[i0 + 2] = q_in
-    dx[i0 + 3] = q_drn + q_leak + q_rel
+    if full:
+        q_out = seal_leak(p, act)  # drain, leakage and relief
+        if o_drn > 0.0:
+            q_out += act[CDW] * o_drn * np.sqrt(2.0 * pp / act[RHO])
+        if act[K_RESTRICT] > 0.0:
+            q_out += act[K_RESTRICT] * np.sqrt(pp)
+        if p > act[P_RELIEF]:
+            q_out += act[G_RELIEF] * (p - act[P_RELIEF])
+        # ---- oil volume behind the valve and the piston's compliance
+        cap = (act[V0] + act[A_P] * piston_position(p, act)) * oil_compliance(pp, act[K_OIL], act[AIR])
+        if act[P_PRE] < p < act[P_CONTACT]:
+            cap += act[A_P] * act[A_P] / act[K_RESET]
+        dx[i0 + 1] = (q_in - q_out) / cap
+        dx[i0 + 2] = q_in
+        dx[i0 + 3] = q_out
     f_mag = magnet_force(i_m, act)
     # steady flow (Bernoulli) force: the jet through an open port pulls the stem towards closing
     dp_in = act[P_SUP] - p - act[R_LINE] * q_in
-    f_flow = act[K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * max(p, 0.0))
+    f_flow = act[K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * pp)
     f_stem = f_mag + act[F_PRE] - act[A_FB] * p - f_flow
     return f_stem, normal_force(p, act)
 

@@ -210,16 +210,20 @@ def _capacity(j, t, left, x, net, ext):
 
 
 @_jit_inline
-def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, refactor):
+def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, G, refactor, full=True):
     """Derivatives ``dx`` and element torques ``aux`` for fixed modes; False if singular.
 
     The constraint matrix depends on the modes only, so it is factored when
     ``refactor`` is set and the columns of its inverse that multiply the body
     torques are kept in ``Gt`` (transposed); every other call is then a small
-    matrix-vector product instead of a triangular solve.
+    matrix-vector product instead of a triangular solve (``G``, the same columns
+    row by row, so that product runs over contiguous memory).
 
     ``aux`` layout: clutch torques (nc) | capacity signals (nc) | gear output
     torques (ng) | spring torques (ns) | gear input torques (ng).
+
+    With ``full`` False only ``aux`` is needed (an output row): the accelerations
+    and the actuator's pressure derivative are then skipped.
     """
     nb = net.J.shape[0]
     ns = net.sp_k.shape[0]
@@ -251,7 +255,7 @@ def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, refactor):
         aux[2 * nc + ng + j] = tau
     if net.act.shape[0] > 0:
         u = signal_value(int(net.act[act_.U_SIG]), t, left, net.sig, net.tab, ext)
-        f_stem, _ = act_.evaluate(x, net.act, u, ext, dx)
+        f_stem, _ = act_.evaluate(x, net.act, u, ext, dx, full)
         stem = int(net.act[act_.STEM_BODY])
         z[stem] += f_stem
         p_src += f_stem * x[stem]
@@ -322,11 +326,13 @@ def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, refactor):
                 Gt[c, r] = 0.0
             Gt[c, c] = 1.0
             _lu_solve(A, piv, Gt[c], n)
+            for r in range(n):
+                G[r, c] = Gt[c, r]
     # accelerations into dx, constraint torques into z[nb:n] (the right-hand side is zero there)
-    for r in range(n):
+    for r in range(0 if full else nb, n):
         acc = 0.0
         for c in range(nb):
-            acc += Gt[c, r] * z[c]
+            acc += G[r, c] * z[c]
         if r < nb:
             dx[r] = acc
         else:
@@ -404,7 +410,7 @@ def _events(x, dx, aux, net, clm, grm, g):
 
 
 @_jit
-def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, released):
+def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, G, released):
     """Decide consistent modes at an event or breakpoint; project newly locked speeds.
 
     ``released`` (nc + ng) is scratch space. Returns False if the system is singular.
@@ -459,7 +465,7 @@ def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, released):
                         w = 0.5 * (x[a] + x[b])
                     x[a] = w
                     x[b] = w
-        if not _rhs(t, False, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, True):
+        if not _rhs(t, False, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, G, True):
             return False
         changed = False
         for k in range(ng):
@@ -631,6 +637,7 @@ class Workspace(NamedTuple):
     z: np.ndarray
     piv: np.ndarray
     Gt: np.ndarray  # (nb, nmat) torque-to-solution columns of the inverse constraint matrix
+    G: np.ndarray  # (nmat, nb) the same, transposed
     y_new: np.ndarray
     y_tmp: np.ndarray
     bw: np.ndarray  # (7,) dense-output weights
@@ -644,7 +651,7 @@ class Workspace(NamedTuple):
 def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
     """State and event functions at ``theta_t`` inside the last step (fixed modes)."""
     _dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
-    _rhs(theta_t, False, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.dx, ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, False)
+    _rhs(theta_t, False, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.dx, ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, ws.G, False)
     _events(ws.y_tmp, ws.dx, ws.aux_new, net, ws.clm, ws.grm, ws.g_new)
 
 
@@ -654,7 +661,7 @@ def _emit(t, y, ws, net, ext, out_t, out_x, out_aux, out_mode):
     i = ws.istate[1]
     if i >= out_t.shape[0]:
         return
-    _rhs(t, False, y, net, ext, ws.clm, ws.grm, ws.dx, ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, False)
+    _rhs(t, False, y, net, ext, ws.clm, ws.grm, ws.dx, ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, ws.G, False, False)
     out_t[i] = t
     _copy(out_x[i], y)
     _copy(out_aux[i], ws.aux_new)
@@ -681,10 +688,10 @@ def _restart(ws, net, ext):
     """Re-decide modes at the current time and refresh the first stage."""
     t = ws.fstate[0]
     _copy(ws.clm_before, ws.clm)
-    if not _settle(t, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.Gt, ws.released):
+    if not _settle(t, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.Gt, ws.G, ws.released):
         return False
     _log_modes(t, ws.clm_before, ws)
-    if not _rhs(t, False, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.Gt, True):
+    if not _rhs(t, False, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.Gt, ws.G, True):
         return False
     _copy(ws.K[0], ws.dx)
     _events(ws.x, ws.dx, ws.aux, net, ws.clm, ws.grm, ws.g_old)
@@ -774,11 +781,11 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
         _copy(y_old, ws.x)
         for s in range(1, 6):
             _stage(y_old, ws.K, h, s, ws.y_tmp)
-            if not _rhs(t + _C[s] * h, True, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.K[s], ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, False):
+            if not _rhs(t + _C[s] * h, True, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.K[s], ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, ws.G, False):
                 return ERR_SINGULAR
         _stage(y_old, ws.K, h, 6, ws.y_new)
         t_new = t_lim if at_lim else t + h
-        if not _rhs(t_new, True, ws.y_new, net, ext, ws.clm, ws.grm, ws.K[6], ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, False):
+        if not _rhs(t_new, True, ws.y_new, net, ext, ws.clm, ws.grm, ws.K[6], ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, ws.G, False):
             return ERR_SINGULAR
         err = _error_norm(y_old, ws.y_new, ws.K, h, rtol, atol)
         # PI step control (Hairer's DOPRI5): steadier near the stability limit
