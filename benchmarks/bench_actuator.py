@@ -4,7 +4,8 @@ Prints the wall time per run (median, after JIT warm-up; the engine at its defau
 rtol 1e-8, which matches the baseline's accuracy, and at the baseline's rtol 1e-6) of the engine on the
 ``clutch`` configuration (DC step 0.2 -> 1 V at 1 s, 85 C, output every 1 ms) and of
 ``benchmarks/scipy_actuator.py`` (solve_ivp, stiff method) on the same equations, the
-speed ratio, and their agreement (pressure samples, time of torque onset).
+speed ratio, and their agreement (pressure samples, time of torque onset) and each one's
+pressure error against a tight reference on which both agree.
 Targets (issue 3): engine < 20 ms and >= 100x faster than the baseline.
 """
 
@@ -25,7 +26,6 @@ from scipy_actuator import actuator_step_scipy  # noqa: E402
 from wetclutch import clutch  # noqa: E402
 from wetclutch.network import integrate  # noqa: E402
 from wetclutch.signals import Step  # noqa: E402
-
 
 
 
@@ -50,6 +50,16 @@ def main() -> None:
         pl = np.interp(ts, tr.t, p_eng)
         print(f"p_clutch at {ts:3.1f} s: engine {pl / 1e5:8.4f} bar (rtol 1e-6: {pe / 1e5:8.4f}), scipy {ps / 1e5:8.4f} bar")
     print(f"torque onset: engine {onset:.4f} s (first 1 ms sample), scipy {sp['onset_time']:.4f} s (event)")
+    # accuracy against a tight reference that both methods agree on (engine rtol 1e-12, scipy rtol 1e-9)
+    ref = integrate(rn.network, 5.0, dt_out=1e-3, rtol=1e-12, atol=1e-14)
+    p_ref = ref.x[:, rn.i_pressure]
+    sp_ref = actuator_step_scipy(5.0, rtol=1e-9)
+    print(f"reference: engine rtol 1e-12 vs scipy rtol 1e-9, largest pressure difference "
+          f"{np.abs(np.interp(ref.t, sp_ref['t'], sp_ref['p_clutch']) - p_ref).max():.2f} Pa")
+    for name, t, p in (("engine rtol 1e-8", tr.t, p_eng), ("engine rtol 1e-6", tr_loose.t, tr_loose.x[:, rn.i_pressure]),
+                       ("scipy  rtol 1e-6", sp["t"], sp["p_clutch"])):
+        err = np.abs(np.interp(ref.t, t, p) - p_ref)
+        print(f"pressure error of {name} against it: largest {err.max():7.1f} Pa, median {np.median(err):6.2f} Pa")
 
 
 if __name__ == "__main__":

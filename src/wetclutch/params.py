@@ -25,8 +25,10 @@ Default values and why (see also ``docs/parameters.md``):
   through the CVT, the half periods use the primary inertia seen through
   ``eta`` and ``1/eta``; ``k_a = (2.1 pi (sqrt(J_f) + sqrt(J_b)))^2`` with
   ``J_f``, ``J_b`` the two-mass reduced inertias, which gives 480.6.
-* ``d_a`` 1.5 N m s/rad: about 2 % of critical damping of that mode; the
-  study calls the driveline's damping small and nonlinear (air drag).
+* ``d_a`` 5 N m s/rad: about 7 % of critical damping of that mode (the
+  study calls the driveline's damping small and nonlinear, air drag); less
+  lets a hard launch judder, since above 79 rad/s the study's mu(slip) falls
+  with slip (see the field's comment).
 * ``b_1`` 2e-5 and ``b_2`` 5e-5 N m s^2: windage of a disc flywheel, about
   0.45 N m at 150 rad/s on the primary.
 
