@@ -188,3 +188,29 @@ def test_turbulent_seal_leak_makes_the_static_pressure_rise_with_temperature():
     d = wc.Params()
     cold0, warm0 = (clutch.static_pressure(d, Step(1.0, 0.0, 0.2), pwm=True, temp_C=temp, t_end=4.0) for temp in (20.0, 85.0))
     assert abs(warm0 - cold0) < 0.2e5
+
+
+def test_output_rows_carry_the_torques_of_their_states():
+    # output rows take a reduced evaluation (no accelerations, no pressure derivative): the
+    # torques they report must still follow from the row's own state
+    params = wc.Params()
+    rn = clutch.build(params, Step(1.0, 0.2, 1.5), temp_C=85.0)
+    tr = integrate(rn.network, 3.0)
+    rec = clutch.actuator_record(params, 85.0)
+    p = tr.x[:, rn.i_pressure]
+    f_n = np.where(p > rec[A.P_CONTACT], rec[A.A_P] * (p - rec[A.P_CONTACT]), 0.0)
+    cap = f_n * f_n / (f_n + rec[A.F_KNEE])
+    assert np.allclose(tr.capacity("clutch"), cap, rtol=1e-12, atol=1e-9)
+    slip = tr.speed("p") - tr.speed("1")
+    mode = tr.modes[:, 0]
+    sliding = np.abs(mode) == 1
+    assert sliding.sum() > 1000
+    mu = np.polyval([c * params.friction.mu_scale for c in params.friction.mu_slip_poly], np.abs(slip))
+    assert np.allclose(tr.clutch_torque("clutch")[sliding], (mode * cap * np.maximum(mu, 0.0))[sliding], rtol=1e-12)
+    d = params.driveline
+    twist = tr.x[:, len(rn.network.bodies) + [s.name for s in rn.network.springs].index("axle")]
+    axle = d.k_a * twist + d.d_a * (tr.speed("r") - tr.speed("s"))
+    assert np.allclose(tr.spring_torque("axle"), axle, rtol=1e-12, atol=1e-9)
+    # the CVT output body is massless: the gear's output torque (a constraint torque) carries the axle
+    assert np.abs(tr.gear_torque("cvt")).max() > 10.0
+    assert np.allclose(tr.gear_torque("cvt"), tr.spring_torque("axle"), rtol=1e-9, atol=1e-7)
