@@ -19,7 +19,7 @@ OPEN, LOCKED = 0, 2  # clutch modes; +1 / -1 mean slipping with sign(w_p - w_1)
 HELD = 0  # road mode; +1 / -1 mean rolling in that direction
 
 DEFAULTS = dict(J_p=1.2, J_1=1e-3, J_s=6.5, b_1=2e-5, b_2=5e-5, i=0.5, eta=0.95,
-                k_a=480.0, d_a=1.5, omega_p0=150.0, T_cap=40.0, t_start=0.5,
+                k_a=480.0, d_a=5.0, omega_p0=150.0, T_cap=40.0, t_start=0.5,
                 t_ramp=0.3, T_load=10.0, peak=1.0)
 
 

@@ -127,6 +127,10 @@ def test_launch_writes_signals_summary_plot(tmp_path):
         (["verify", "--samples", "-4"], "--samples"),
         (["verify", "--workers", "0"], "--workers"),
         (["report", "--baseline-samples", "-1"], "--baseline-samples"),
+        (["launch", "--seed", "-1"], "--seed"),
+        (["verify", "--seed", "-1"], "--seed"),
+        (["report", "--seed", "-1"], "--seed"),
+        (["rig", "step", "--seed", "-1"], "--seed"),
     ],
 )
 def test_launch_and_verify_bad_input(tmp_path, args, fragment):
@@ -136,3 +140,18 @@ def test_launch_and_verify_bad_input(tmp_path, args, fragment):
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and fragment in lines[0], r.stderr
     assert not out.exists()
+
+
+
+def test_write_error_inside_the_output_is_a_one_line_error(tmp_path):
+    # disk full or permissions while the files are written: a WetclutchError (the CLI prints it
+    # as one line, exit 2) and neither the temporary nor the target directory stays behind
+    from wetclutch.errors import WetclutchError
+    from wetclutch.output import atomic_dir
+
+    target = tmp_path / "out"
+    with pytest.raises(WetclutchError, match="cannot write output .*No space left"):
+        with atomic_dir(target) as d:
+            (d / "part.csv").write_text("time\n")
+            raise OSError(28, "No space left on device")
+    assert list(tmp_path.iterdir()) == []

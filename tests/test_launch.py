@@ -102,3 +102,12 @@ def test_inverse_map_inverts_a_known_curve():
 def test_unknown_controller_is_refused():
     with pytest.raises(WetclutchError, match="unknown controller"):
         launch.simulate(Params(), "bang-bang", launch.Conditions(t_max=1.6))
+
+
+def test_controller_refuses_a_friction_law_it_would_truncate():
+    # an identified mu(slip) of higher order as the design: refused by name, not cut to a quadratic
+    design = Params()
+    design.friction.mu_slip_poly = [1e-9, -1.7e-6, 2.7e-4, 2.6e-2]
+    with pytest.raises(WetclutchError, match="friction.mu_slip_poly"):
+        launch.controller_record("launch", design)
+

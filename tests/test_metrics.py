@@ -92,3 +92,11 @@ def test_t95_of_a_ramp_request_is_the_lag_behind_it():
     T_r = 100.0 * np.clip((t - T_REQ - lag) / 0.3, 0.0, 1.0)
     r = metrics.response(t, T_r, ref, T_REQ, None)
     assert r.t95_s == pytest.approx(lag, abs=2 * DT)
+
+
+
+def test_no_relative_error_without_a_request_in_the_window():
+    t = np.arange(0.0, 3.0, 1e-3)
+    req = np.where(t < 1.2, 50.0, 0.0)  # a request dropped before the steady window
+    r = metrics.response(t, np.zeros_like(t), req, 1.0, None)
+    assert np.isnan(r.steady_state_error_pct) and np.isnan(r.t95_s)

@@ -231,6 +231,18 @@ def _check(data: dict[str, np.ndarray], fail: Any) -> None:
         raise fail(f"channel 'time' is not increasing: {t[i]:.6g} s then {t[i + 1]:.6g} s at sample {i + 1}")
 
 
+def command_changes(t: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Indices where a piecewise constant command changes (a DAQ may spread one change over a few samples: it counts once)."""
+    span = float(np.ptp(u))
+    if span <= 0.0:
+        return np.zeros(0, dtype=int)
+    jump = np.abs(np.diff(u)) > 0.02 * span
+    starts = np.flatnonzero(jump & ~np.concatenate([[False], jump[:-1]]))
+    if starts.size == 0:
+        return starts
+    return starts[np.concatenate([[True], np.diff(t[starts]) > 0.02])] + 1
+
+
 def detect_experiment(t: np.ndarray, u: np.ndarray, where: str = "") -> str:
     """The experiment type of a command signal (used when no ``meta.json`` says it).
 
@@ -243,14 +255,7 @@ def detect_experiment(t: np.ndarray, u: np.ndarray, where: str = "") -> str:
     if span <= 0.0:
         raise WetclutchError(f"measurement file '{where}': channel 'u' is constant (no experiment to identify)")
     du = np.diff(u)
-    jump = np.abs(du) > 0.02 * span
-    # a DAQ may spread one change of the command over a few samples
-    starts = np.flatnonzero(jump & ~np.concatenate([[False], jump[:-1]]))
-    if starts.size > 0:
-        times = t[starts]
-        events = starts[np.concatenate([[True], np.diff(times) > 0.02])]
-    else:
-        events = starts
+    events = command_changes(t, u) - 1  # index into du of each change
     if 0 < events.size <= 50 and np.count_nonzero(np.abs(du) > 0.005 * span) <= 10 * events.size:
         if events.size == 1:
             return "step" if du[events[0]:events[0] + 5].sum() > 0 else "relaxation"

@@ -210,14 +210,14 @@ def _capacity(j, t, left, x, net, ext):
 
 
 @_jit_inline
-def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, G, refactor, full=True):
+def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, sol, G, refactor, full=True):
     """Derivatives ``dx`` and element torques ``aux`` for fixed modes; False if singular.
 
     The constraint matrix depends on the modes only, so it is factored when
     ``refactor`` is set and the columns of its inverse that multiply the body
-    torques are kept in ``Gt`` (transposed); every other call is then a small
-    matrix-vector product instead of a triangular solve (``G``, the same columns
-    row by row, so that product runs over contiguous memory).
+    torques are kept in ``G`` (solved one at a time in the scratch vector
+    ``sol``); every other call is then a small matrix-vector product over
+    contiguous rows of ``G`` instead of a triangular solve.
 
     ``aux`` layout: clutch torques (nc) | capacity signals (nc) | gear output
     torques (ng) | spring torques (ns) | gear input torques (ng).
@@ -323,11 +323,11 @@ def _rhs(t, left, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, G, refactor, fu
             return False
         for c in range(nb):
             for r in range(n):
-                Gt[c, r] = 0.0
-            Gt[c, c] = 1.0
-            _lu_solve(A, piv, Gt[c], n)
+                sol[r] = 0.0
+            sol[c] = 1.0
+            _lu_solve(A, piv, sol, n)
             for r in range(n):
-                G[r, c] = Gt[c, r]
+                G[r, c] = sol[r]
     # accelerations into dx, constraint torques into z[nb:n] (the right-hand side is zero there)
     for r in range(0 if full else nb, n):
         acc = 0.0
@@ -410,7 +410,7 @@ def _events(x, dx, aux, net, clm, grm, g):
 
 
 @_jit
-def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, G, released):
+def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv, sol, G, released):
     """Decide consistent modes at an event or breakpoint; project newly locked speeds.
 
     ``released`` (nc + ng) is scratch space. Returns False if the system is singular.
@@ -465,7 +465,7 @@ def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, G, released):
                         w = 0.5 * (x[a] + x[b])
                     x[a] = w
                     x[b] = w
-        if not _rhs(t, False, x, net, ext, clm, grm, dx, aux, A, z, piv, Gt, G, True):
+        if not _rhs(t, False, x, net, ext, clm, grm, dx, aux, A, z, piv, sol, G, True):
             return False
         changed = False
         for k in range(ng):
@@ -636,8 +636,8 @@ class Workspace(NamedTuple):
     A: np.ndarray  # LU factors of the constraint matrix for the current modes
     z: np.ndarray
     piv: np.ndarray
-    Gt: np.ndarray  # (nb, nmat) torque-to-solution columns of the inverse constraint matrix
-    G: np.ndarray  # (nmat, nb) the same, transposed
+    sol: np.ndarray  # (nmat,) scratch: one column of the inverse constraint matrix
+    G: np.ndarray  # (nmat, nb) torque-to-solution columns of the inverse constraint matrix
     y_new: np.ndarray
     y_tmp: np.ndarray
     bw: np.ndarray  # (7,) dense-output weights
@@ -651,7 +651,7 @@ class Workspace(NamedTuple):
 def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
     """State and event functions at ``theta_t`` inside the last step (fixed modes)."""
     _dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
-    _rhs(theta_t, False, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.dx, ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, ws.G, False)
+    _rhs(theta_t, False, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.dx, ws.aux_new, ws.A, ws.z, ws.piv, ws.sol, ws.G, False)
     _events(ws.y_tmp, ws.dx, ws.aux_new, net, ws.clm, ws.grm, ws.g_new)
 
 
@@ -661,7 +661,7 @@ def _emit(t, y, ws, net, ext, out_t, out_x, out_aux, out_mode):
     i = ws.istate[1]
     if i >= out_t.shape[0]:
         return
-    _rhs(t, False, y, net, ext, ws.clm, ws.grm, ws.dx, ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, ws.G, False, False)
+    _rhs(t, False, y, net, ext, ws.clm, ws.grm, ws.dx, ws.aux_new, ws.A, ws.z, ws.piv, ws.sol, ws.G, False, False)
     out_t[i] = t
     _copy(out_x[i], y)
     _copy(out_aux[i], ws.aux_new)
@@ -688,10 +688,10 @@ def _restart(ws, net, ext):
     """Re-decide modes at the current time and refresh the first stage."""
     t = ws.fstate[0]
     _copy(ws.clm_before, ws.clm)
-    if not _settle(t, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.Gt, ws.G, ws.released):
+    if not _settle(t, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.sol, ws.G, ws.released):
         return False
     _log_modes(t, ws.clm_before, ws)
-    if not _rhs(t, False, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.Gt, ws.G, True):
+    if not _rhs(t, False, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.sol, ws.G, True):
         return False
     _copy(ws.K[0], ws.dx)
     _events(ws.x, ws.dx, ws.aux, net, ws.clm, ws.grm, ws.g_old)
@@ -781,11 +781,11 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
         _copy(y_old, ws.x)
         for s in range(1, 6):
             _stage(y_old, ws.K, h, s, ws.y_tmp)
-            if not _rhs(t + _C[s] * h, True, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.K[s], ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, ws.G, False):
+            if not _rhs(t + _C[s] * h, True, ws.y_tmp, net, ext, ws.clm, ws.grm, ws.K[s], ws.aux_new, ws.A, ws.z, ws.piv, ws.sol, ws.G, False):
                 return ERR_SINGULAR
         _stage(y_old, ws.K, h, 6, ws.y_new)
         t_new = t_lim if at_lim else t + h
-        if not _rhs(t_new, True, ws.y_new, net, ext, ws.clm, ws.grm, ws.K[6], ws.aux_new, ws.A, ws.z, ws.piv, ws.Gt, ws.G, False):
+        if not _rhs(t_new, True, ws.y_new, net, ext, ws.clm, ws.grm, ws.K[6], ws.aux_new, ws.A, ws.z, ws.piv, ws.sol, ws.G, False):
             return ERR_SINGULAR
         err = _error_norm(y_old, ws.y_new, ws.K, h, rtol, atol)
         # PI step control (Hairer's DOPRI5): steadier near the stability limit

@@ -36,7 +36,8 @@ from scipy import signal
 from scipy.ndimage import maximum_filter1d
 from scipy.optimize import least_squares
 
-from .channels import Recording
+from . import clutch
+from .channels import Recording, command_changes
 from .driveline import ring_frequency
 from .errors import WetclutchError
 from .measurement import DEFAULT_SENSORS
@@ -131,18 +132,6 @@ class Plateau:
     t1: float
 
 
-def command_changes(t: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Indices where a piecewise constant command changes (a change over a few samples counts once)."""
-    span = float(np.ptp(u))
-    if span <= 0.0:
-        return np.zeros(0, dtype=int)
-    jump = np.abs(np.diff(u)) > 0.02 * span
-    starts = np.flatnonzero(jump & ~np.concatenate([[False], jump[:-1]]))
-    if starts.size == 0:
-        return starts
-    return starts[np.concatenate([[True], np.diff(t[starts]) > 0.02])] + 1
-
-
 def plateaus(rec: Recording) -> list[Plateau]:
     """Static pressures on the constant-command stretches (at least :data:`SETTLE` long) of a step-like run."""
     if rec.experiment in BROADBAND:
@@ -190,8 +179,8 @@ def onset(rec: Recording) -> Onset | None:
     standard deviations above its level before the step. After the plates touch
     the pressure jumps within a few milliseconds (the piston stops, the oil
     volume is stiff), so the pressure at the onset is the end of the slow stroke
-    phase: a straight line fitted to the 50 ms of pressure before the jump and
-    evaluated at the onset. This avoids reading the pressure on its steep flank,
+    phase: a straight line fitted to the pressure from 60 ms to 5 ms before the
+    onset (clear of the jump) and evaluated at the onset. This avoids reading the pressure on its steep flank,
     where one sample of jitter would be worth tenths of a bar.
     """
     if rec.config != "clutch" or rec.experiment != "step":
@@ -211,7 +200,7 @@ def onset(rec: Recording) -> Onset | None:
         return None
     t_on, k_on, _ = crossing
     dt = rec.dt
-    # the stroke line: 60 ms to 5 ms before the sample where the torque showed, clear of the jump
+    # the stroke line: 60 ms to 5 ms before the (interpolated) onset, clear of the jump
     w = (t > t_on - 0.06) & (t < t_on - 0.005) & (t > t[k_cmd])
     if np.count_nonzero(w) < 10:
         return None
@@ -758,7 +747,7 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
         m, se = _weighted_mean(np.array([o.p_contact for o in onsets]), np.array([o.p_contact_se for o in onsets]))
         est["contact_pressure_Pa"] = Estimate(m, se, "Pa", [_source(o.rec, o.t_command, o.t_command + o.dead_time)
                                                             for o in onsets])
-    p_contact = est["contact_pressure_Pa"].value if onsets else _prior_contact(prior)
+    p_contact = est["contact_pressure_Pa"].value if onsets else clutch.p_contact(prior)
     by_rec = {id(o.rec): o for o in onsets}
     slips = [s for rec in recordings if (s := slip_samples(rec, prior, p_contact, by_rec.get(id(rec)))) is not None]
     if slips:
@@ -809,12 +798,6 @@ GAIN_GROUPS = {
     "clutch_gain_poly_bar_per_duty": ("clutch", "pwm", 2),
     "valve_gain_poly_bar_per_V": ("valve-only", "dc", 2),
 }
-
-
-def _prior_contact(p: Params) -> float:
-    from .clutch import p_contact
-
-    return p_contact(p)
 
 
 def reduced_inertias(p: Params, ratio: float) -> tuple[float, float]:

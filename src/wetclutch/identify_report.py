@@ -15,7 +15,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from . import params as params_mod  # noqa: E402
-from .identify import BAR, Identification  # noqa: E402
+from .identify import BAR, MODEL_NAMES, Identification  # noqa: E402
 from .output import atomic_dir, write_json  # noqa: E402
 
 #: identified parameters shown against the prior: dotted path -> identified.json entry it comes from
@@ -89,7 +89,7 @@ def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
                   "| file | model | gain [bar/unit] | dead time [s] | parameters | VAF [%] |", "|---|---|---|---|---|---|"]
         for m in result.steps:
             par = ", ".join(f"{k} {v:.4g}" for k, v in m.params.items())
-            lines.append(f"| {m.rec.path} | {m.as_json()['model']} | {m.gain / BAR:.4g} | {m.theta:.4f} | {par} | {m.vaf:.1f} |")
+            lines.append(f"| {m.rec.path} | {MODEL_NAMES[m.order]} | {m.gain / BAR:.4g} | {m.theta:.4f} | {par} | {m.vaf:.1f} |")
     if result.responses:
         lines += ["", "### Frequency response (command to pressure)", "",
                   "| file | band [Hz] | fitted gain [bar/unit] | dead time [s] | omega_n [rad/s] | zeta |", "|---|---|---|---|---|---|"]

@@ -146,6 +146,8 @@ class Conditions:
             raise WetclutchError(f"--oil-temp {self.oil_temp_C:g} C is outside -30..150 C")
         if self.profile not in PROFILES and not Path(self.profile).is_file():
             raise WetclutchError(f"--profile must be step, ramp or an existing CSV file (got '{self.profile}')")
+        if self.seed < 0:
+            raise WetclutchError(f"--seed must be >= 0 (got {self.seed})")
         if not 0.0 <= self.noise_scale <= 10.0:
             raise WetclutchError(f"--noise-scale must be in 0..10 (got {self.noise_scale:g})")
         if not 1e-4 <= self.dt <= 1e-2:
@@ -188,15 +190,20 @@ def controller_record(name: str, params: Params, gains: Any = None, dt: float = 
         r[control.KP_B], r[control.KI_B] = g.kp, g.ki
     else:
         g = gains or control.LaunchGains()
+        f = params.friction
+        poly = np.trim_zeros(np.asarray(f.mu_slip_poly, dtype=float), "f") * f.mu_scale
+        if poly.size > 3:
+            # the controller's friction law is quadratic (the study's fit); dropping terms would be silent
+            raise WetclutchError(f"friction.mu_slip_poly: the launch controller takes at most a quadratic, "
+                                 f"got {poly.size} coefficients")
         table = _feedforward(params)
         r = np.zeros(control.FF_TABLE + table.size)
         r[control.KIND] = control.LAUNCH
-        h, d, f = params.hydraulics, params.driveline, params.friction
+        h, d = params.hydraulics, params.driveline
         r[control.P_KISS] = clutch.p_contact(params)
         r[control.HOLD_OFFSET], r[control.FILL_EXIT], r[control.HOLD_RATE] = g.hold_offset, g.fill_exit, g.hold_rate
         r[control.A_P], r[control.RATIO], r[control.ETA] = h.A_p, d.ratio, d.eta
         mu = np.zeros(3)
-        poly = np.asarray(f.mu_slip_poly)[-3:] * f.mu_scale
         mu[3 - poly.size:] = poly
         r[control.MU2], r[control.MU1], r[control.MU0] = mu
         r[control.F_KNEE] = f.F_knee

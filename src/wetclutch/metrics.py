@@ -81,6 +81,8 @@ def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_
     win = (t >= w0) & (t <= w1)
     T_ss = float(np.mean(T_r[win]))
     ref = float(np.mean(t_ref[win]))
+    if not ref > 0.0:  # no torque asked for over the window: no relative error, no 95 % level
+        return Response(np.nan, np.nan, np.nan, np.nan, np.nan, (w0, w1))
     ess = abs(T_ss - ref) / ref * 100.0
     after = t >= t_req
     reached = np.flatnonzero(after & (T_r >= 0.95 * T_ss))

@@ -285,7 +285,7 @@ def new_workspace(net: engine.NetArrays, x0: np.ndarray, t0: float = 0.0, h0: fl
         A=np.zeros((max(nmat, 1), max(nmat, 1))),
         z=np.zeros(max(nmat, 1)),
         piv=np.zeros(max(nmat, 1), dtype=np.int64),
-        Gt=np.zeros((max(net.J.size, 1), max(nmat, 1))),
+        sol=np.zeros(max(nmat, 1)),
         G=np.zeros((max(nmat, 1), max(net.J.size, 1))),
         y_new=np.zeros(nx),
         y_tmp=np.zeros(nx),

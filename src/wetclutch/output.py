@@ -42,6 +42,9 @@ def atomic_dir(target: str | Path) -> Iterator[Path]:
         os.rename(tmp, target)
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
+    except OSError as err:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise WetclutchError(f"cannot write output '{target}': {err.strerror or err}") from None
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise

@@ -6,7 +6,7 @@ files (``--param-file``), overridden one by one (``--set driveline.ratio=0.6``,
 the value read as a TOML literal), printed (``wetclutch params show``) and
 written back complete (``wetclutch params export``).
 
-Default values and why (see also ``docs/parameters.md``):
+Default values and why (see also ``docs/model.md``, "Default parameters"):
 
 * ``J_p`` 1.2 kg m^2 and ``J_s`` 6.5 kg m^2. The study gives no inertias. The
   primary flywheel stands for an engine-side flywheel of a passenger-car

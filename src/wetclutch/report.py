@@ -8,7 +8,6 @@ from typing import Any
 import numpy as np
 
 from . import launch, metrics, verify
-from .errors import WetclutchError
 from .output import atomic_dir, write_json
 from .params import Params
 
@@ -61,8 +60,12 @@ def verify_table(result: dict[str, Any]) -> str:
     for w in result["worst"][:5]:
         m = w["metrics"]
         fails = [k for k, ok in w["requirements"].items() if not ok]
-        figs = (f"ess {m['steady_state_error_pct']:.2f} %, t95 {m['t95_s']:.3f} s, overshoot {m['overshoot_pct']:.1f} %"
-                if m and m.get("t95_s") is not None and m.get("steady_state_error_pct") is not None else "no steady state")
+        if not m or m.get("steady_state_error_pct") is None:
+            figs = "no steady state"
+        else:
+            t95 = f"{m['t95_s']:.3f} s" if m.get("t95_s") is not None else "95 % never reached"
+            ovs = f"{m['overshoot_pct']:.1f} %" if m.get("overshoot_pct") is not None else "n/a"
+            figs = f"ess {m['steady_state_error_pct']:.2f} %, t95 {t95}, overshoot {ovs}"
         lines.append(f"- #{w['index']}: {figs}; fails: {', '.join(fails) or 'none'}  \n  `{w['replay']}`")
     return "\n".join(lines)
 
@@ -86,11 +89,8 @@ def main_job(out: str | Path, samples: int = 1000, baseline_samples: int = 200, 
     from .plotting import plot_launch
 
     # refuse bad options before minutes of launches, not after
-    for name, n in (("--samples", samples), ("--baseline-samples", baseline_samples)):
-        if n < 0:
-            raise WetclutchError(f"{name} must be >= 0 (got {n})")
-    if workers is not None and workers < 1:
-        raise WetclutchError(f"--workers must be >= 1 (got {workers})")
+    verify.check_options(samples, seed, workers)
+    verify.check_options(baseline_samples, seed, workers, "--baseline-samples")
     p = Params()
     launches = []
     for temp in (41.0, 85.0):

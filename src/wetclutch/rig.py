@@ -89,6 +89,8 @@ class Settings:
             raise WetclutchError(f"--oil-temp {temp:g} C is outside -30..150 C")
         if not 10.0 <= self.rate_hz <= 1.0 / TRUTH_DT / 2:
             raise WetclutchError(f"--rate must be in 10..{1.0 / TRUTH_DT / 2:g} Hz (got {self.rate_hz:g})")
+        if self.seed < 0:
+            raise WetclutchError(f"--seed must be >= 0 (got {self.seed})")
         if self.t_end is not None and not T_STEP < self.t_end <= 600.0:
             raise WetclutchError(f"--t-end must be in ({T_STEP:g}, 600] s (got {self.t_end:g})")
         return Settings(self.experiment, self.input_mode, level, from_, temp, self.config, float(self.rate_hz),

@@ -137,6 +137,16 @@ def _worker(args: tuple[Sample, str, str, Any]) -> dict[str, Any]:
     return run_sample(args[0], args[1], _GRID, args[2], args[3])
 
 
+def check_options(n: int, seed: int, workers: int | None, samples_option: str = "--samples") -> None:
+    """Refuse a bad sample count, seed or worker count (one-line errors naming the option)."""
+    if n < 0:
+        raise WetclutchError(f"{samples_option} must be >= 0 (got {n})")
+    if seed < 0:
+        raise WetclutchError(f"--seed must be >= 0 (got {seed})")
+    if workers is not None and workers < 1:
+        raise WetclutchError(f"--workers must be >= 1 (got {workers})")
+
+
 def run(n: int = 1000, seed: int = 0, workers: int | None = None, controller: str = "launch", profile: str = "step",
         corners: bool = True, progress: bool = True, gains: Any = None) -> dict[str, Any]:
     """Verify ``controller`` on ``n`` random samples (plus corners); returns the ``verify.json`` content.
@@ -145,12 +155,9 @@ def run(n: int = 1000, seed: int = 0, workers: int | None = None, controller: st
     or :class:`~wetclutch.control.PIGains`), in the samples and in the nominal launches alike.
     """
     global _GRID
-    if n < 0:
-        raise WetclutchError(f"--samples must be >= 0 (got {n})")
+    check_options(n, seed, workers)
     if controller not in launch.control.CONTROLLERS:
         raise WetclutchError(f"unknown controller '{controller}'")
-    if workers is not None and workers < 1:
-        raise WetclutchError(f"--workers must be >= 1 (got {workers})")
     workers = workers or os.cpu_count() or 1
     cases = samples(n, seed, corners)
     # the design's feedforward table and the nominal responses, made once here and
@@ -194,7 +201,7 @@ def summarize(results: list[dict[str, Any]], controller: str, seed: int, n: int)
         m = r["metrics"]
         if not m:
             return np.inf
-        e = (m["steady_state_error_pct"] or np.inf) / metrics.REQ_ESS_PCT
+        e = (m["steady_state_error_pct"] if m["steady_state_error_pct"] is not None else np.inf) / metrics.REQ_ESS_PCT
         t = (m["t95_s"] if m["t95_s"] is not None else np.inf) / metrics.REQ_T95_S
         return max(e, t) + (0 if r["all_pass"] else 10)
 
