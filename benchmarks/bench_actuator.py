@@ -1,6 +1,7 @@
 """Speed of a 5 s clutch step with the full actuator and driveline against a stiff scipy baseline.
 
-Prints the wall time per run (median, after JIT warm-up; the engine at its default
+Prints the wall time per run (7 rounds in which the three take turns: 10 engine runs in a
+row, then one scipy run; median per turn, then over the rounds; after JIT warm-up; the engine at its default
 rtol 1e-8, which matches the baseline's accuracy, and at the baseline's rtol 1e-6) of the engine on the
 ``clutch`` configuration (DC step 0.2 -> 1 V at 1 s, 85 C, output every 1 ms) and of
 ``benchmarks/scipy_actuator.py`` (solve_ivp, stiff method) on the same equations, the
@@ -19,7 +20,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _timing import median_time  # noqa: E402
+from _timing import interleaved_times  # noqa: E402
 
 import wetclutch as wc  # noqa: E402
 from scipy_actuator import actuator_step_scipy  # noqa: E402
@@ -33,9 +34,12 @@ def main() -> None:
     rn = clutch.build(wc.Params(), Step(1.0, 0.2, 1.0), temp_C=85.0)
     # the engine at its default rtol 1e-8 matches the baseline (rtol 1e-6 with an absolute
     # tolerance 1e-9 of each state's scale) to 0.1 mbar; at rtol 1e-6 it is off by ~2 mbar
-    t_eng, tr = median_time(lambda: integrate(rn.network, 5.0, dt_out=1e-3), 20)
-    t_loose, tr_loose = median_time(lambda: integrate(rn.network, 5.0, dt_out=1e-3, rtol=1e-6), 20)
-    t_sp, sp = median_time(lambda: actuator_step_scipy(5.0, rtol=1e-6), 3)
+    times, res = interleaved_times({
+        "engine": (lambda: integrate(rn.network, 5.0, dt_out=1e-3), 10),
+        "loose": (lambda: integrate(rn.network, 5.0, dt_out=1e-3, rtol=1e-6), 10),
+        "scipy": (lambda: actuator_step_scipy(5.0, rtol=1e-6), 1),
+    }, 7)
+    (t_eng, tr), (t_loose, tr_loose), (t_sp, sp) = ((times[k], res[k]) for k in ("engine", "loose", "scipy"))
     p_eng = tr.x[:, rn.i_pressure]
     onset = tr.t[np.argmax(np.abs(tr.clutch_torque("clutch")) > 0.2)]
     print(f"machine: {os.cpu_count()} cores")
