@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import importlib.util
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.integrate import quad
@@ -214,3 +218,43 @@ def test_output_rows_carry_the_torques_of_their_states():
     # the CVT output body is massless: the gear's output torque (a constraint torque) carries the axle
     assert np.abs(tr.gear_torque("cvt")).max() > 10.0
     assert np.allclose(tr.gear_torque("cvt"), tr.spring_torque("axle"), rtol=1e-9, atol=1e-7)
+
+
+def _independent_model():
+    """``benchmarks/scipy_actuator.py``: the same equations written out by hand for solve_ivp."""
+    bench = Path(__file__).resolve().parents[1] / "benchmarks"
+    sys.path.insert(0, str(bench))  # it imports its sibling _timing
+    try:
+        spec = importlib.util.spec_from_file_location("scipy_actuator", bench / "scipy_actuator.py")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+    finally:
+        sys.path.remove(str(bench))
+    return mod
+
+
+def test_engine_agrees_with_an_independent_implementation_of_the_same_equations():
+    # A clutch step (0.2 -> 1 V at 1 s, 85 C) through fill, contact, the road load's release and
+    # 19 stem stick/slip switches, written a second time as a plain solve_ivp model (BDF, rtol 1e-6)
+    # with its own event logic: pressure, onset, event sequence and every energy term must agree.
+    sp_mod = _independent_model()
+    sp = sp_mod.actuator_step_scipy(5.0)
+    rn = clutch.build(wc.Params(), Step(1.0, 0.2, 1.0), temp_C=85.0)
+    tr = integrate(rn.network, 5.0)
+    assert sp["n_events"] == tr.stats["events"]
+    stem = np.flatnonzero(np.array([name.startswith("stem") for _, name in sp["log"]]))
+    assert stem.size == np.count_nonzero(tr.events[:, 1] == 2)
+    p_eng = tr.x[:, rn.i_pressure]
+    assert np.max(np.abs(np.interp(tr.t, sp["t"], sp["p_clutch"]) - p_eng)) < 200.0  # Pa, of up to 1.6 bar
+    T_c = np.abs(tr.clutch_torque("clutch"))
+    onset = tr.t[np.argmax(T_c > 0.2)]
+    assert sp["onset_time"] <= onset < sp["onset_time"] + 1e-3  # the first 1 ms sample after it
+    e = tr.energies()
+    names = ("dissipated_clutch", "dissipated_brake", "dissipated_stem_friction", "dissipated_drag",
+             "dissipated_damper", "dissipated_gear", "source_work")
+    for name, value in zip(names, sp["y_end"][sp_mod.E_CL : sp_mod.V_IN], strict=True):
+        assert value == pytest.approx(e[name][-1], rel=1e-3), name
+    i0 = rn.network.actuator_state
+    assert sp["y_end"][sp_mod.V_IN] == pytest.approx(tr.x[-1, i0 + 2], rel=1e-3)
+    assert sp["y_end"][sp_mod.V_OUT] == pytest.approx(tr.x[-1, i0 + 3], rel=1e-3)
+    assert sp_mod.energy_residual(sp_mod.Rig(), sp["y"]) < 1e-6
