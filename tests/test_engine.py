@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wetclutch import engine
-from wetclutch.network import GROUND, Network, integrate
+import wetclutch as wc
+from wetclutch import engine, scenarios
+from wetclutch.network import GROUND, Network, integrate, new_workspace
 from wetclutch.signals import Const, Ramp, Sine, Step
 
 
@@ -160,3 +161,30 @@ def test_lossy_gear_at_standstill_sticks_within_its_friction(T_in, moves):
     else:
         assert np.all(w == 0.0) and np.all(tr.speed("in") == 0.0)
     assert tr.energy_residual() < 1e-9
+
+
+def _chunked_run(network, refactor_always: bool) -> np.ndarray:
+    """States after advancing 1 ms at a time with a restart before each call, as a closed loop does."""
+    net, x0, ext = network.compile()
+    ws = new_workspace(net, x0)
+    n = 2001
+    out = (np.zeros(n), np.zeros((n, x0.size)), np.zeros((n, ws.aux.size)), np.zeros((n, ws.clm.size), dtype=np.int64))
+    for k in range(n - 1):
+        ws.istate[0] = 1
+        if refactor_always:
+            ws.fact[:] = engine._NO_MODE
+        assert engine.advance(net, ext, ws, (k + 1) * 1e-3, 1e-3, 0.0, 1e-8, 1e-10, np.inf, *out) == engine.OK
+    return out[1][: ws.istate[1]]
+
+
+def test_restarts_that_keep_the_modes_reuse_the_constraint_factors():
+    # the engage driveline through slip, lock-up and the road load's release; its constraint
+    # matrix changes with the modes, and reusing its factors must change no result at all
+    net = scenarios._engage(wc.Params())
+    x_cached = _chunked_run(net, refactor_always=False)
+    x_fresh = _chunked_run(net, refactor_always=True)
+    assert x_cached.shape[0] == 2001
+    np.testing.assert_array_equal(x_cached, x_fresh)
+    # and the modes did change on the way (so the factors had to be remade in between)
+    tr = integrate(net, 2.0)
+    assert np.unique(tr.modes[:, 0]).size >= 2

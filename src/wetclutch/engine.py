@@ -49,6 +49,7 @@ _jit = njit(cache=True, error_model="numpy", _nrt=False, fastmath=_FAST)
 _jit_inline = njit(cache=True, error_model="numpy", inline="always", _nrt=False, fastmath=_FAST)
 
 FREE, LOCKED, UNDECIDED = 0, 2, 99  # clutch modes; +1 / -1 are sliding forward / backward
+_NO_MODE = -99  # in Workspace.fact: no constraint factors made yet
 STUCK = 3  # gear held at standstill (+3 / -3: sign of the held output torque); +1 / -1: power flowing forward / back
 
 # status codes returned by the core
@@ -409,8 +410,36 @@ def _events(x, dx, aux, net, clm, grm, g):
 # ---------------------------------------------------------------- mode decisions
 
 
+@_jit_inline
+def _stale(fact, clm, grm):
+    """Whether the constraint factors (``A``, ``G``) were made for other modes than ``clm``, ``grm``.
+
+    The constraint matrix depends on the modes only, so a restart that keeps them (an input
+    sample of a closed loop, a breakpoint) reuses its factors. ``fact`` records the modes of
+    the factors and is updated here: the caller refactors when this returns True.
+    """
+    nc = clm.shape[0]
+    stale = False
+    for j in range(nc):
+        if fact[j] != clm[j]:
+            stale = True
+            fact[j] = clm[j]
+    for k in range(grm.shape[0]):
+        if fact[nc + k] != grm[k]:
+            stale = True
+            fact[nc + k] = grm[k]
+    return stale
+
+
+@_jit_inline
+def _forget(fact):
+    # factors that failed are no factors
+    for i in range(fact.shape[0]):
+        fact[i] = _NO_MODE
+
+
 @_jit
-def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv, sol, G, released):
+def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv, sol, G, released, fact):
     """Decide consistent modes at an event or breakpoint; project newly locked speeds.
 
     ``released`` (nc + ng) is scratch space. Returns False if the system is singular.
@@ -465,7 +494,8 @@ def _settle(t, x, net, ext, clm, grm, dx, aux, A, z, piv, sol, G, released):
                         w = 0.5 * (x[a] + x[b])
                     x[a] = w
                     x[b] = w
-        if not _rhs(t, False, x, net, ext, clm, grm, dx, aux, A, z, piv, sol, G, True):
+        if not _rhs(t, False, x, net, ext, clm, grm, dx, aux, A, z, piv, sol, G, _stale(fact, clm, grm)):
+            _forget(fact)
             return False
         changed = False
         for k in range(ng):
@@ -650,6 +680,7 @@ class Workspace(NamedTuple):
     y_old: np.ndarray  # state at the start of the current step
     clm_before: np.ndarray  # clutch modes before a restart
     released: np.ndarray  # (nc + ng) scratch for _settle
+    fact: np.ndarray  # (nc + ng) clutch and gear modes the factors in A, G were made for (see _stale)
     evlog: np.ndarray  # (max_events, 3): t, element index, new mode
 
 
@@ -694,10 +725,13 @@ def _restart(ws, net, ext):
     """Re-decide modes at the current time and refresh the first stage."""
     t = ws.fstate[0]
     _copy(ws.clm_before, ws.clm)
-    if not _settle(t, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.sol, ws.G, ws.released):
+    if not _settle(t, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.sol, ws.G, ws.released,
+                   ws.fact):
         return False
     _log_modes(t, ws.clm_before, ws)
-    if not _rhs(t, False, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.sol, ws.G, True):
+    if not _rhs(t, False, ws.x, net, ext, ws.clm, ws.grm, ws.dx, ws.aux, ws.A, ws.z, ws.piv, ws.sol, ws.G,
+                _stale(ws.fact, ws.clm, ws.grm)):
+        _forget(ws.fact)
         return False
     _copy(ws.K[0], ws.dx)
     _events(ws.x, ws.dx, ws.aux, net, ws.clm, ws.grm, ws.g_old)

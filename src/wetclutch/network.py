@@ -293,6 +293,7 @@ def new_workspace(net: engine.NetArrays, x0: np.ndarray, t0: float = 0.0, h0: fl
         y_old=np.zeros(nx),
         clm_before=np.zeros(nc, dtype=np.int64),
         released=np.zeros(nc + ng, dtype=np.int64),
+        fact=np.full(nc + ng, engine._NO_MODE, dtype=np.int64),
         evlog=np.zeros((4096, 3)),
     )
 
