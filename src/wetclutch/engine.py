@@ -661,7 +661,8 @@ class Workspace(NamedTuple):
     x: np.ndarray  # current state
     clm: np.ndarray  # clutch modes
     grm: np.ndarray  # gear modes (+1 forward, -1 backward, 0 stuck)
-    fstate: np.ndarray  # [t, h, log of the previous accepted error, next PWM edge, PWM period start]
+    fstate: np.ndarray  # [t, h, log of the previous accepted error, next PWM edge, PWM period start,
+    #                      first step after the last PWM edge to level 0, to level 1 (0: none yet)]
     istate: np.ndarray  # [need_settle, n_out, n_steps, n_rejected, n_events, n_switches, n_evlog, last event fn]
     K: np.ndarray  # (7, nx) stages
     dx: np.ndarray
@@ -745,6 +746,9 @@ def _pwm_edge(t, ws, net, ext):
 
     The duty cycle is the actuator input, sampled at the start of each period.
     ``fstate[3]`` is the next edge, ``fstate[4]`` the start of the current period.
+    Returns the new level (0 or 1) and proposes the first step after it: the one that
+    followed the last edge to that level (``fstate[5 + level]``; see :func:`advance`), since
+    the periods repeat nearly alike and the step before the edge knows nothing of the jump.
     """
     a = net.act
     lvl = int(a[act_.PWM_EXT])
@@ -752,18 +756,22 @@ def _pwm_edge(t, ws, net, ext):
     if ext[lvl] > 0.5 and t < ws.fstate[4] + period - 1e-12 * max(1.0, t):
         ext[lvl] = 0.0  # falling edge inside the period
         ws.fstate[3] = ws.fstate[4] + period
-        return
-    ws.fstate[4] = t
-    duty = signal_value(int(a[act_.U_SIG]), t, False, net.sig, net.tab, ext)
-    if duty <= 0.0:
-        ext[lvl] = 0.0
-        ws.fstate[3] = t + period
-    elif duty >= 1.0:
-        ext[lvl] = 1.0
-        ws.fstate[3] = t + period
     else:
-        ext[lvl] = 1.0
-        ws.fstate[3] = t + duty * period
+        ws.fstate[4] = t
+        duty = signal_value(int(a[act_.U_SIG]), t, False, net.sig, net.tab, ext)
+        if duty <= 0.0:
+            ext[lvl] = 0.0
+            ws.fstate[3] = t + period
+        elif duty >= 1.0:
+            ext[lvl] = 1.0
+            ws.fstate[3] = t + period
+        else:
+            ext[lvl] = 1.0
+            ws.fstate[3] = t + duty * period
+    level = 1 if ext[lvl] > 0.5 else 0
+    if ws.fstate[5 + level] > 0.0:
+        ws.fstate[1] = ws.fstate[5 + level]
+    return level
 
 
 @_jit
@@ -783,8 +791,9 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
     stalls = 0
     bp_i = np.searchsorted(net.bps, t, side="right")
     pwm = net.act.shape[0] > 0 and net.act[act_.MODE] == act_.PWM
+    after_edge = -1  # level of the PWM edge the next accepted step follows (-1: none)
     if pwm and ws.fstate[3] == -np.inf:
-        _pwm_edge(t, ws, net, ext)
+        after_edge = _pwm_edge(t, ws, net, ext)
         ws.istate[0] = 1
     if ws.istate[0] != 0:
         if not _restart(ws, net, ext):
@@ -813,7 +822,7 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
                 if hit_bp:
                     bp_i += 1
                 if hit_pwm:
-                    _pwm_edge(t, ws, net, ext)
+                    after_edge = _pwm_edge(t, ws, net, ext)
                 if not _restart(ws, net, ext):
                     return ERR_SINGULAR
                 continue
@@ -906,11 +915,14 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
         fac = max(0.1, min(5.0, np.exp(0.17 * log_err - 0.04 * ws.fstate[2]) / 0.9))
         ws.fstate[2] = max(log_err, np.log(1e-4))
         ws.fstate[1] = h / fac if not at_lim else max(ws.fstate[1], h)
+        if after_edge >= 0:
+            ws.fstate[5 + after_edge] = h / fac  # what this first step after the edge should have been
+            after_edge = -1
         if at_lim and (hit_bp or hit_pwm):
             if hit_bp:
                 bp_i += 1
             if hit_pwm:
-                _pwm_edge(t, ws, net, ext)
+                after_edge = _pwm_edge(t, ws, net, ext)
             if not _restart(ws, net, ext):
                 return ERR_SINGULAR
         else:

@@ -274,7 +274,7 @@ def new_workspace(net: engine.NetArrays, x0: np.ndarray, t0: float = 0.0, h0: fl
         x=x0.astype(np.float64).copy(),
         clm=np.full(nc, engine.UNDECIDED, dtype=np.int64),
         grm=np.ones(ng, dtype=np.int64),
-        fstate=np.array([t0, h0, np.log(1e-4), -np.inf, t0]),
+        fstate=np.array([t0, h0, np.log(1e-4), -np.inf, t0, 0.0, 0.0]),
         istate=np.array([1, 0, 0, 0, 0, 0, 0, -1], dtype=np.int64),
         K=np.zeros((7, nx)),
         dx=np.zeros(nx),
