@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import pytest
@@ -22,3 +25,20 @@ def reference() -> Path:
 @pytest.fixture(scope="session")
 def engage_default() -> wc.Result:
     return wc.simulate("engage")
+
+
+def _refused(args: Sequence[str], fragment: str, out: Path) -> subprocess.CompletedProcess:
+    r = subprocess.run([sys.executable, "-m", "wetclutch.cli", *args, "--out", str(out)],
+                       capture_output=True, text=True, check=False)
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and fragment in lines[0], r.stderr
+    assert not out.exists()
+    return r
+
+
+@pytest.fixture(scope="session")
+def cli_refuses() -> Callable[[Sequence[str], str, Path], subprocess.CompletedProcess]:
+    """``cli_refuses(args, fragment, out)``: ``wetclutch ARGS --out OUT`` exits 2 with one line of error
+    naming ``fragment`` and writes nothing; returns the finished process for further checks."""
+    return _refused
