@@ -19,7 +19,6 @@ def median_time(fn: Callable[[], Any], repeats: int) -> tuple[float, Any]:
     return statistics.median(times), out
 
 
-
 def interleaved_times(fns: dict[str, tuple[Callable[[], Any], int]], rounds: int) -> tuple[dict[str, float], dict[str, Any]]:
     """Median wall time (s) per call of each function, timed in turns: ``{name: (fn, calls per turn)}``.
 

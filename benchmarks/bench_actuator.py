@@ -24,7 +24,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _timing import interleaved_times
-from scipy_actuator import E_CL, V_IN, Rig, actuator_step_scipy, energy_residual
+from scipy_actuator import E_CL, ENERGY_TERMS, V_IN, Rig, actuator_step_scipy, energy_residual
 
 import wetclutch as wc
 from wetclutch import clutch
@@ -63,8 +63,7 @@ def main() -> None:
         print(f"p_clutch at {ts:3.1f} s: engine {pl / 1e5:8.4f} bar (rtol 1e-6: {pe / 1e5:8.4f}), scipy {ps / 1e5:8.4f} bar")
     print(f"torque onset: engine {onset:.4f} s (first 1 ms sample), scipy {sp['onset_time']:.4f} s (event)")
     e_eng = tr.energies()
-    e_sp = dict(zip(("dissipated_clutch", "dissipated_brake", "dissipated_stem_friction", "dissipated_drag",
-                     "dissipated_damper", "dissipated_gear", "source_work"), sp["y_end"][E_CL:V_IN]))
+    e_sp = dict(zip(ENERGY_TERMS, sp["y_end"][E_CL:V_IN], strict=True))
     dev = max(abs(e_sp[k] / e_eng[k][-1] - 1.0) for k in e_sp)
     print(f"energy terms at 5 s: largest relative difference {dev:.1e}; energy balance closes to "
           f"{tr.energy_residual():.1e} (engine), {energy_residual(Rig(), sp['y']):.1e} (scipy) of the stored energy")

@@ -57,6 +57,9 @@ W_P, W_1, PHI, W_S, X, V, I, P, IM = range(9)
 # bookkeeping (quadratures): energy dissipated in the clutch, road-load brake, stem friction, air drag,
 # dampers, CVT; work of the actuator's force on the stem; oil volume in and out of the clutch
 E_CL, E_BR, E_SF, E_AIR, E_DAMP, E_GEAR, W_SRC, V_IN, V_OUT = range(9, 18)
+#: the engine's names (``Trajectory.energies``) of the energy states E_CL ... W_SRC, in that order
+ENERGY_TERMS = ("dissipated_clutch", "dissipated_brake", "dissipated_stem_friction", "dissipated_drag",
+                "dissipated_damper", "dissipated_gear", "source_work")
 LOCKED, STUCK = 2, 3  # stem/brake held; CVT held at standstill (+-3: sign of the held torque)
 T_STEP, U0, U1 = 1.0, 0.2, 1.0  # input step, V
 ONSET = 0.2  # clutch torque defining the onset, N m
@@ -111,9 +114,11 @@ def _seal_leak(r, p):
     return 2.0 * g * p / (1.0 + math.sqrt(1.0 + 4.0 * g * g * p / (k * k)))
 
 
-def _flows(r, xs, p):
-    """Oil flows into and out of the clutch volume (drain port, seal leak, restriction, relief), m^3/s."""
-    _, _, q_in, q_drn = _port_flows(r, xs, p)
+def _flows(r, ports, p):
+    """Oil flows into and out of the clutch volume (drain port, seal leak, restriction, relief), m^3/s.
+
+    ``ports``: :func:`_port_flows` at this state."""
+    _, _, q_in, q_drn = ports
     q_out = q_drn + _seal_leak(r, p) + r[A.K_RESTRICT] * math.sqrt(max(p, 0.0))
     if p > r[A.P_RELIEF]:
         q_out += r[A.G_RELIEF] * (p - r[A.P_RELIEF])
@@ -145,11 +150,11 @@ def _play(r, cur, cur_dot, i_m):
     return cur_dot * min(z, 1.0) ** 8 if z > 0.0 else 0.0
 
 
-def _stem_force(m, y):
+def _stem_force(m, y, ports=None):
     """Magnet force + preload - pressure feedback - spring: what the friction must hold, N."""
     r = m.r
     i_m = y[IM] if r[A.I_HYST] > 0.0 else y[I]
-    o_sup, o_drn, q_in, _ = _port_flows(r, y[X], y[P])
+    o_sup, o_drn, q_in, _ = _port_flows(r, y[X], y[P]) if ports is None else ports
     dp_in = r[A.P_SUP] - y[P] - r[A.R_LINE] * q_in  # steady flow force: the jets pull the stem shut
     f_flow = r[A.K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * max(y[P], 0.0))
     return _magnet(r, i_m) + r[A.F_PRE] - r[A.A_FB] * y[P] - f_flow - m.c * y[X]
@@ -184,9 +189,10 @@ def _rhs(t, y, m, modes, u):
         volt = -r[A.R_FW] * y[I]  # the output transistor blocks: freewheel
     dy[I] = (volt - r[A.R_COIL] * y[I]) / r[A.L_COIL]
     dy[IM] = _play(r, y[I], dy[I], y[IM])
-    q_in, q_out = _flows(r, y[X], y[P])
+    ports = _port_flows(r, y[X], y[P])
+    q_in, q_out = _flows(r, ports, y[P])
     dy[P] = (q_in - q_out) / _capacitance(r, y[P])
-    f_stem = _stem_force(m, y)
+    f_stem = _stem_force(m, y, ports)
     if ms != LOCKED:
         dy[X] = y[V]
         dy[V] = (f_stem - m.d * y[V] - m.F_f * ms) / m.m

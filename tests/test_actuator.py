@@ -250,9 +250,7 @@ def test_engine_agrees_with_an_independent_implementation_of_the_same_equations(
     onset = tr.t[np.argmax(T_c > 0.2)]
     assert sp["onset_time"] <= onset < sp["onset_time"] + 1e-3  # the first 1 ms sample after it
     e = tr.energies()
-    names = ("dissipated_clutch", "dissipated_brake", "dissipated_stem_friction", "dissipated_drag",
-             "dissipated_damper", "dissipated_gear", "source_work")
-    for name, value in zip(names, sp["y_end"][sp_mod.E_CL : sp_mod.V_IN], strict=True):
+    for name, value in zip(sp_mod.ENERGY_TERMS, sp["y_end"][sp_mod.E_CL : sp_mod.V_IN], strict=True):
         assert value == pytest.approx(e[name][-1], rel=1e-3), name
     i0 = rn.network.actuator_state
     assert sp["y_end"][sp_mod.V_IN] == pytest.approx(tr.x[-1, i0 + 2], rel=1e-3)

@@ -660,7 +660,7 @@ class Workspace(NamedTuple):
 
     x: np.ndarray  # current state
     clm: np.ndarray  # clutch modes
-    grm: np.ndarray  # gear modes (+1 forward, -1 backward, 0 stuck)
+    grm: np.ndarray  # gear modes (+1 forward, -1 backward, +-STUCK held at standstill)
     fstate: np.ndarray  # [t, h, log of the previous accepted error, next PWM edge, PWM period start,
     #                      first step after the last PWM edge to level 0, to level 1 (0: none yet)]
     istate: np.ndarray  # [need_settle, n_out, n_steps, n_rejected, n_events, n_switches, n_evlog, last event fn]
