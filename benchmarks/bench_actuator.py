@@ -27,9 +27,9 @@ from _timing import interleaved_times
 from scipy_actuator import E_CL, ENERGY_TERMS, V_IN, Rig, actuator_step_scipy, energy_residual
 
 import wetclutch as wc
-from wetclutch import clutch
-from wetclutch.network import integrate
-from wetclutch.signals import Step
+from wetclutch.plant import clutch
+from wetclutch.sim.network import integrate
+from wetclutch.sim.signals import Step
 
 
 def main() -> None:

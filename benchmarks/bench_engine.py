@@ -28,8 +28,8 @@ from _timing import median_time  # noqa: E402
 
 import wetclutch as wc  # noqa: E402
 from scipy_engage import engage_scipy  # noqa: E402
-from wetclutch.network import integrate  # noqa: E402
-from wetclutch.scenarios import SCENARIOS  # noqa: E402
+from wetclutch.plant.scenarios import SCENARIOS  # noqa: E402
+from wetclutch.sim.network import integrate  # noqa: E402
 
 
 

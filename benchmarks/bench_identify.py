@@ -4,7 +4,7 @@ Runs four experiments on the virtual rig (clutch steps at 41 C and 85 C, a PWM
 staircase and a noise run on the valve alone), then measures their true signals
 again with fresh sensor noise as often as it takes to fill one hour of recordings
 (as many files as a test campaign would give), and times
-:func:`wetclutch.identify.identify` on them (median of repeats after a warm-up).
+:func:`wetclutch.ident.identify` on them (median of repeats after a warm-up).
 Reading files is timed separately, per second of data, from the MDF 4 and MAT
 files of the four runs. Target (issue 4): identification of one hour under 10 s.
 
@@ -24,7 +24,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _timing import median_time  # noqa: E402
 
-from wetclutch import channels, identify, measurement, params, rig  # noqa: E402
+from wetclutch import ident, params  # noqa: E402
+from wetclutch.ident import recordings as channels  # noqa: E402
+from wetclutch.report import rig as rig_report  # noqa: E402
+from wetclutch.rig import experiments as rig  # noqa: E402
+from wetclutch.rig import sensors  # noqa: E402
 
 RUNS = {
     "step41": dict(experiment="step", level=1.5, oil_temp_C=41.0),
@@ -46,7 +50,7 @@ def main() -> None:
         for name, kw in RUNS.items():
             kw = dict(kw)
             res = rig.run(kw.pop("experiment"), p, **kw)
-            rig.write(res, Path(tmp) / name)
+            rig_report.write(res, Path(tmp) / name)
             base[name] = res
             for ext in ("mf4", "mat"):
                 t0 = time.perf_counter()
@@ -60,7 +64,7 @@ def main() -> None:
         for name, res in base.items():
             s = res.meta["settings"]
             cols = [c for c in rig.MEASURED_UNITS if c in res.truth.columns]
-            m = measurement.measure(res.truth[cols], 1000.0, seed=1000 + k)
+            m = sensors.measure(res.truth[cols], 1000.0, seed=1000 + k)
             data = {c: m[c].to_numpy() for c in m.columns}
             recordings.append(channels.Recording(Path(f"synthetic/{name}_{k:04d}.mf4"), data, res.meta["experiment"],
                                                  s["config"], s["input_mode"]))
@@ -68,7 +72,7 @@ def main() -> None:
             k += 1
     samples = sum(r.t.size for r in recordings)
 
-    elapsed, result = median_time(lambda: identify.identify(recordings), args.repeats)
+    elapsed, result = median_time(lambda: ident.identify(recordings), args.repeats)
     e = result.estimates
     print(f"machine: {os.cpu_count()} cores, python {sys.version.split()[0]}")
     print(f"data: {len(recordings)} files, {seconds / 3600:.3f} h, {samples} samples x {len(rig.MEASURED_UNITS)} channels "

@@ -22,7 +22,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _timing import median_time  # noqa: E402
 
-from wetclutch import launch, metrics, verify  # noqa: E402
+from wetclutch.launch import loop as launch  # noqa: E402
+from wetclutch.launch import metrics, verify  # noqa: E402
 from wetclutch.params import Params  # noqa: E402
 
 

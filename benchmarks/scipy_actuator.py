@@ -4,7 +4,7 @@ A typical hand-written model used as a speed baseline for the compiled engine: a
 Python right-hand side, a stiff method (BDF by default), terminal ``events`` for the
 mode switches and a loop restarting ``solve_ivp`` after every event and at the input
 step. Same equations and default parameters (oil at 85 C) as
-``wetclutch.clutch.build(Params(), Step(1.0, 0.2, 1.0))``: the parameter values are
+``wetclutch.plant.clutch.build(Params(), Step(1.0, 0.2, 1.0))``: the parameter values are
 read from :mod:`wetclutch`, the dynamics are written here.
 
 State ``y = [w_p, w_1, phi, w_s, x, v, I, p, I_m]``: primary, clutch-output speeds, axle twist,
@@ -48,10 +48,11 @@ from _timing import median_time
 from scipy.integrate import solve_ivp
 
 import wetclutch as wc
-from wetclutch import actuator as A
-from wetclutch import clutch, oil
-from wetclutch.network import integrate
-from wetclutch.signals import Step
+from wetclutch.physics import actuator as A
+from wetclutch.physics import oil
+from wetclutch.plant import clutch
+from wetclutch.sim.network import integrate
+from wetclutch.sim.signals import Step
 
 W_P, W_1, PHI, W_S, X, V, I, P, IM = range(9)
 # bookkeeping (quadratures): energy dissipated in the clutch, road-load brake, stem friction, air drag,
@@ -74,7 +75,7 @@ class Rig:
     def __init__(self, temp_C: float = 85.0):
         prm = wc.Params()
         d, v, f = prm.driveline, prm.valve, prm.friction
-        self.r = clutch.actuator_record(prm, temp_C).tolist()  # floats, indexed by wetclutch.actuator names
+        self.r = A.pack(prm, temp_C).tolist()  # floats, indexed by wetclutch.physics.actuator names
         self.J_p, self.J_1, self.J_s, self.b_1, self.b_2 = d.J_p, d.J_1, d.J_s, d.b_1, d.b_2
         self.i, self.eta, self.k_a, self.d_a, self.w_p0 = d.ratio, d.eta, d.k_a, d.d_a, d.omega_p0
         self.drag = f.drag_20C * oil.dynamic_viscosity(temp_C) / oil.dynamic_viscosity(20.0)
@@ -347,7 +348,7 @@ def actuator_step_scipy(t_end: float = 5.0, method: str = "BDF", rtol: float = 1
 
 
 def _engine_run(t_end, dt_out):
-    """The engine's run of the same step (``wetclutch.network.integrate``, its default tolerances)."""
+    """The engine's run of the same step (``wetclutch.sim.network.integrate``, its default tolerances)."""
     rn = clutch.build(wc.Params(), Step(T_STEP, U0, U1))
     return rn, integrate(rn.network, t_end, dt_out=dt_out)
 

@@ -58,8 +58,10 @@ def _scrub_paths(obj: Any, root: str) -> Any:
 def outputs() -> dict[str, dict[str, Any]]:
     """name -> {"hash": sha256 of the full output, "figures": a few headline numbers}."""
     import wetclutch as wc
-    from wetclutch import channels, identify, launch, metrics, rig
+    from wetclutch import ident, launch, rig
+    from wetclutch.launch import metrics
     from wetclutch.params import Params
+    from wetclutch.report import rig as rig_report
 
     out: dict[str, dict[str, Any]] = {}
     eng = wc.simulate("engage")
@@ -80,18 +82,18 @@ def outputs() -> dict[str, dict[str, Any]]:
         runs = {"dc85": dict(level=2.5, oil_temp_C=85.0, seed=2),
                 "stair": dict(experiment="staircase", config="valve-only", input_mode="pwm", level=0.15, from_=0.0,
                               seed=3)}
-        rig.write(step, Path(tmp) / "pwm41")
-        recs = [channels.load(Path(tmp) / "pwm41" / "measured.csv")]
+        rig_report.write(step, Path(tmp) / "pwm41")
+        recs = [ident.load(Path(tmp) / "pwm41" / "measured.csv")]
         for name, kw in runs.items():
             kw = dict(kw)
             res = rig.run(kw.pop("experiment", "step"), Params(), **kw)
-            rig.write(res, Path(tmp) / name)
-            recs.append(channels.load(Path(tmp) / name / "measured.csv"))
-        ident = identify.identify(recs)
-        content = _scrub_paths(json.loads(json.dumps(ident.as_json(), default=float)), tmp)
+            rig_report.write(res, Path(tmp) / name)
+            recs.append(ident.load(Path(tmp) / name / "measured.csv"))
+        found = ident.identify(recs)
+        content = _scrub_paths(json.loads(json.dumps(found.as_json(), default=float)), tmp)
     out["identify"] = {"hash": _digest(content),
-                       "figures": {"contact_pressure_Pa": ident.estimates["contact_pressure_Pa"].value,
-                                   "mu0": ident.estimates["mu_slip_poly"].value[-1]}}
+                       "figures": {"contact_pressure_Pa": found.estimates["contact_pressure_Pa"].value,
+                                   "mu0": found.estimates["mu_slip_poly"].value[-1]}}
     return out
 
 

@@ -11,10 +11,13 @@ import pytest
 from scipy.integrate import quad
 
 import wetclutch as wc
-from wetclutch import actuator as A
-from wetclutch import calibration, clutch, oil, rig
-from wetclutch.network import integrate
-from wetclutch.signals import Step, Table
+from wetclutch.physics import actuator as A
+from wetclutch.physics import oil
+from wetclutch.plant import clutch
+from wetclutch.rig import calibration
+from wetclutch.rig import experiments as rig
+from wetclutch.sim.network import integrate
+from wetclutch.sim.signals import Step, Table
 
 
 @pytest.fixture(scope="module")
@@ -51,7 +54,7 @@ def test_static_gain_is_monotone_in_the_input():
 def test_oil_volume_is_conserved(pwm_step):
     """Flow in - flow out (drain, leakage, relief) = piston displacement + compression of the oil."""
     t = pwm_step.truth
-    rec = clutch.actuator_record(wc.Params(), 85.0)
+    rec = A.pack(wc.Params(), 85.0)
 
     def volume(p):
         return rec[A.V0] + rec[A.A_P] * t_piston(p)
@@ -93,7 +96,7 @@ def test_colder_oil_fills_slower():
 
 
 def test_study_figures_that_the_default_meets():
-    """The study's dead times, contact pressure, DC static curve, valve test and hysteresis (spec section 6)."""
+    """The study's dead times, contact pressure, DC static curve, valve test and hysteresis (the study's figures)."""
     figs = {f.name: f for f in calibration.run()}
     for name, f in figs.items():
         if name.startswith(("dead time", "contact pressure", "whole clutch static p vs DC", "driveline resonance",
@@ -112,7 +115,7 @@ def test_pwm_duty_sets_the_mean_coil_current():
 def test_feed_restriction_and_port_act_as_orifices_in_series():
     """Two equal turbulent orifices in series pass 1/sqrt(2) of one (no laminar line)."""
     p = wc.load_params(overrides={"hydraulics.line_length": 0.0})
-    rec = clutch.actuator_record(p, 85.0)
+    rec = A.pack(p, 85.0)
     nx = 13  # the actuator's five states (I, p, V_in, V_out, I_m) at 8..12
     rec[A.STATE], rec[A.STEM_SPRING] = 8, 0
     x = np.zeros(nx)
@@ -134,7 +137,7 @@ def test_flow_force_lowers_the_valve_test_pressure():
 
 def test_magnet_force_continues_linearly_above_saturation():
     """Quadratic below ``I_sat``; above it a straight line with the slope it had there (C1)."""
-    rec = clutch.actuator_record(wc.load_params(overrides={"valve.I_sat": 0.5}), 85.0)
+    rec = A.pack(wc.load_params(overrides={"valve.I_sat": 0.5}), 85.0)
 
     def f(i):
         return A.magnet_force(i, rec)
@@ -170,7 +173,7 @@ def test_valve_staircase_shows_the_magnetic_hysteresis_under_pwm():
 
 
 def test_seal_leak_is_a_gap_in_series_with_an_orifice():
-    rec = clutch.actuator_record(wc.Params(), 85.0)
+    rec = A.pack(wc.Params(), 85.0)
     p = 4e5
     rec[A.G_LEAK], rec[A.K_SEAL] = 1e-10, 3e-8
     q = A.seal_leak(p, rec)
@@ -200,7 +203,7 @@ def test_output_rows_carry_the_torques_of_their_states():
     params = wc.Params()
     rn = clutch.build(params, Step(1.0, 0.2, 1.5), temp_C=85.0)
     tr = integrate(rn.network, 3.0)
-    rec = clutch.actuator_record(params, 85.0)
+    rec = A.pack(params, 85.0)
     p = tr.x[:, rn.i_pressure]
     f_n = np.where(p > rec[A.P_CONTACT], rec[A.A_P] * (p - rec[A.P_CONTACT]), 0.0)
     cap = f_n * f_n / (f_n + rec[A.F_KNEE])

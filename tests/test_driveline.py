@@ -8,9 +8,9 @@ from scipy.linalg import expm
 from scipy.optimize import brentq
 
 import wetclutch as wc
-from wetclutch import driveline
-from wetclutch.network import integrate
-from wetclutch.signals import Step
+from wetclutch.plant import driveline
+from wetclutch.sim.network import integrate
+from wetclutch.sim.signals import Step
 
 
 def test_constant_capacity_sync_time_matches_closed_form():

@@ -6,9 +6,12 @@ import numpy as np
 import pytest
 
 import wetclutch as wc
-from wetclutch import engine, scenarios
-from wetclutch.network import GROUND, Network, integrate, new_workspace
-from wetclutch.signals import Const, Ramp, Sine, Step
+from wetclutch.plant import scenarios
+from wetclutch.sim import integrator
+from wetclutch.sim import workspace as engine
+from wetclutch.sim.network import GROUND, Network, integrate
+from wetclutch.sim.signals import Const, Ramp, Sine, Step
+from wetclutch.sim.workspace import new_workspace
 
 
 def test_two_inertias_constant_capacity_sync_time():
@@ -138,9 +141,9 @@ def test_rerun_does_not_recompile():
     b = net.body("b", 1.0)
     net.clutch("c", a, b, Const(1.0))
     integrate(net, 1.0)
-    n_sig = len(engine.advance.signatures)
+    n_sig = len(integrator.advance.signatures)
     integrate(net, 2.0)
-    assert len(engine.advance.signatures) == n_sig
+    assert len(integrator.advance.signatures) == n_sig
 
 
 @pytest.mark.parametrize(("T_in", "moves"), [(10.0, False), (12.0, True)])
@@ -172,8 +175,8 @@ def _chunked_run(network, refactor_always: bool) -> np.ndarray:
     for k in range(n - 1):
         ws.istate[0] = 1
         if refactor_always:
-            ws.fact[:] = engine._NO_MODE
-        assert engine.advance(net, ext, ws, (k + 1) * 1e-3, 1e-3, 0.0, 1e-8, 1e-10, np.inf, *out) == engine.OK
+            ws.fact[:] = engine.NO_MODE
+        assert integrator.advance(net, ext, ws, (k + 1) * 1e-3, 1e-3, 0.0, 1e-8, 1e-10, np.inf, *out) == engine.OK
     return out[1][: ws.istate[1]]
 
 

@@ -16,9 +16,15 @@ from hypothesis import strategies as st
 from scipy import io as sio
 from scipy import signal
 
-from wetclutch import channels, clutch, driveline, identify, params, rig
+from wetclutch import ident, params
+from wetclutch.ident import dynamics
+from wetclutch.ident import recordings as channels
 from wetclutch.errors import WetclutchError
-from wetclutch.onset import TORQUE_ONSET, first_crossing
+from wetclutch.physics import actuator
+from wetclutch.plant import clutch, driveline
+from wetclutch.report import rig as rig_report
+from wetclutch.rig import experiments as rig
+from wetclutch.rig.onset import TORQUE_ONSET, first_crossing
 
 #: the rig's true parameters: not the defaults, so that recovering them means something
 TRUE = {"friction.mu_slip_poly": [-1.2e-6, 2.2e-4, 3.0e-2], "driveline.ratio": 0.6}
@@ -39,7 +45,7 @@ def rig_data(tmp_path_factory):
     for name, kw in RUNS.items():
         kw = dict(kw)
         res = rig.run(kw.pop("experiment"), p, **kw)
-        rig.write(res, root / name)
+        rig_report.write(res, root / name)
         results[name] = res
     return p, root, results
 
@@ -48,7 +54,7 @@ def rig_data(tmp_path_factory):
 def identified(rig_data):
     _, root, _ = rig_data
     recs = [channels.load(root / n / f"measured.{ext}") for n, ext in zip(RUNS, ("mf4", "csv", "mat", "mf4"))]
-    return identify.identify(recs)
+    return ident.identify(recs)
 
 
 def true_dead_time(res: rig.RigResult) -> float:
@@ -84,9 +90,9 @@ def test_dead_time_and_contact_pressure_are_recovered(identified, rig_data):
         assert abs(o.dead_time - true_dead_time(results[name])) < 0.015, name
         assert abs(o.rec.oil_temp_C - RUNS[name]["oil_temp_C"]) < 0.5
     est = identified.estimates["contact_pressure_Pa"]
-    assert abs(est.value - clutch.p_contact(p)) < 0.05e5
+    assert abs(est.value - actuator.contact_pressure(p)) < 0.05e5
     dts = {round(o.rec.oil_temp_C): o.dead_time for o in identified.onsets}
-    assert dts[41] > dts[85]  # cold oil fills slower (spec 6)
+    assert dts[41] > dts[85]  # cold oil fills slower (the study's dead times)
 
 
 def test_ratio_and_resonance_are_recovered(identified, rig_data):
@@ -149,7 +155,7 @@ def test_step_model_recovers_first_order_plus_dead_time():
     u = np.where(t >= 1.0, 0.3, 0.1)
     s = np.clip(t - 1.0 - theta, 0.0, None)
     p = 0.1 * gain + 0.2 * gain * (1 - np.exp(-s / tau)) + np.random.default_rng(0).normal(0, 2e3, t.size)
-    (m1,) = identify.step_models(_recording(t, u, p, "step"), orders=(1,))
+    (m1,) = dynamics.step_models(_recording(t, u, p, "step"), orders=(1,))
     assert abs(m1.params["tau_s"] / tau - 1) < 0.03 and abs(m1.theta - theta) < 0.003
     assert abs(m1.gain / gain - 1) < 0.01 and m1.vaf > 99
 
@@ -161,7 +167,7 @@ def test_step_model_recovers_a_third_order_valve():
     sys_ = ([wn**2], np.polymul([tau_c, 1.0], [1.0, 2 * zeta * wn, wn**2]))
     _, y, _ = signal.lsim(sys_, np.where(t >= 1.0 + theta, 0.2, 0.0), t)
     p = 2e5 + 20e5 * y + np.random.default_rng(2).normal(0, 2e3, t.size)
-    (m3,) = identify.step_models(_recording(t, u, p, "step"), orders=(3,))
+    (m3,) = dynamics.step_models(_recording(t, u, p, "step"), orders=(3,))
     got = m3.params
     assert abs(got["tau_coil_s"] / tau_c - 1) < 0.1 and abs(got["omega_n_rad_s"] / wn - 1) < 0.05
     assert abs(got["zeta"] / zeta - 1) < 0.1 and abs(m3.theta - theta) < 0.003 and m3.vaf > 99
@@ -174,7 +180,7 @@ def test_frequency_response_recovers_a_second_order_system():
     u = 0.2 + 0.05 * signal.sosfilt(sos, rng.standard_normal(t.size)) / 0.1
     wn, zeta, gain = 2 * np.pi * 6.0, 0.4, 10e5
     _, y, _ = signal.lsim(([gain * wn**2], [1, 2 * zeta * wn, wn**2]), u - 0.2, t)
-    fr = identify.frequency_response(_recording(t, u, 2e5 + y + rng.normal(0, 2e3, t.size), "noise"))
+    fr = dynamics.frequency_response(_recording(t, u, 2e5 + y + rng.normal(0, 2e3, t.size), "noise"))
     mp = fr.model_params
     assert abs(mp["omega_n_rad_s"] / wn - 1) < 0.05 and abs(mp["zeta"] / zeta - 1) < 0.1
     assert abs(mp["gain_bar_per_unit"] / 10.0 - 1) < 0.05 and mp["dead_time_s"] < 0.005
@@ -227,8 +233,8 @@ def test_engineering_units_through_a_channel_map_give_the_same_result(identified
     mv = channels.read_channel_map(tmp_path / "map_mv.toml")
     pct = channels.read_channel_map(tmp_path / "map_pct.toml")
     recs = [channels.load(f, pct if "stair" in str(f) or "noise" in str(f) else mv) for f in files]
-    eng = identify.identify(recs)
-    si = identify.identify([channels.load(r.path.parent / "measured.csv") for r in identified.recordings])
+    eng = ident.identify(recs)
+    si = ident.identify([channels.load(r.path.parent / "measured.csv") for r in identified.recordings])
     assert [r.experiment for r in recs] == [r.experiment for r in identified.recordings]
     for key in ("mu_slip_poly", "contact_pressure_Pa", "ratio", "resonance_Hz", "valve_gain_poly", "damping_ratio"):
         a, b = np.array(eng.estimates[key].value), np.array(si.estimates[key].value)
@@ -315,7 +321,7 @@ _CORRUPTIONS = ("nan_run", "shuffle", "duplicate", "drop", "garbage", "truncate"
        length=st.integers(1, 400), column=st.sampled_from(list(channels.CHANNELS)), junk=st.binary(max_size=500),
        seed=st.integers(0, 2**16))
 def test_random_corruptions_never_crash(small_csv, tmp_path_factory, ext, kind, where, length, column, junk, seed):
-    from wetclutch.measurement import write_measurement
+    from wetclutch.rig.files import write_measurement
 
     frame = small_csv.copy()
     n = len(frame)
@@ -348,7 +354,7 @@ def test_random_corruptions_never_crash(small_csv, tmp_path_factory, ext, kind, 
         path.write_bytes(raw[:cut] + (junk if kind == "garbage" else b""))
     try:
         rec = channels.load(path)
-        identify.identify([rec])
+        ident.identify([rec])
     except WetclutchError as err:
         assert str(path) in str(err) or "identif" in str(err) or "measurement" in str(err)
         assert "\n" not in str(err)

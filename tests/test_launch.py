@@ -4,7 +4,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wetclutch import control, launch, metrics
+from wetclutch.launch import controller as control
+from wetclutch.launch import design as designs
+from wetclutch.launch import loop as launch
+from wetclutch.launch import metrics
 from wetclutch.errors import WetclutchError
 from wetclutch.params import Params
 
@@ -31,7 +34,7 @@ def test_the_design_beats_the_plain_pi_baseline(nominal):
 
 def test_signals_carry_the_rig_channels_request_and_input(nominal):
     sig = nominal.signals
-    assert list(sig.columns) == ["time", *launch.CHANNELS, "t_ref", "u"]
+    assert list(sig.columns) == ["time", *control.MEASURED, "t_ref", "u"]
     assert np.all((sig.u >= 0.2) & (sig.u <= 5.0))  # within the rig's DC input range
     assert np.all(sig.t_ref[sig.time < 1.0] == 0.0) and np.all(sig.t_ref[sig.time >= 1.0] == 100.0)
     # the run stops t_after after the final lock
@@ -89,10 +92,10 @@ def test_bad_conditions_name_the_field(kwargs, field):
 
 
 def test_inverse_map_inverts_a_known_curve():
-    v = control.MAP_VOLTS
+    v = designs.MAP_VOLTS
     p = (0.41 * v**2 + 0.29 * v + 0.20) * 1e5  # the study's static curve, bar -> Pa
-    table = control.inverse_map(p[None, :])[0]
-    target = control.MAP_PRESSURES
+    table = designs.inverse_map(p[None, :])[0]
+    target = designs.MAP_PRESSURES
     inside = (target >= p[0]) & (target <= p[-1])
     exact = (-0.29 + np.sqrt(0.29**2 - 4 * 0.41 * (0.20 - target[inside] / 1e5))) / (2 * 0.41)
     np.testing.assert_allclose(table[inside], exact, atol=0.02)  # linear interpolation between 0.3 V points
@@ -109,5 +112,5 @@ def test_controller_refuses_a_friction_law_it_would_truncate():
     design = Params()
     design.friction.mu_slip_poly = [1e-9, -1.7e-6, 2.7e-4, 2.6e-2]
     with pytest.raises(WetclutchError, match="friction.mu_slip_poly"):
-        launch.controller_record("launch", design)
+        designs.record("launch", design)
 

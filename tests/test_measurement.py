@@ -12,7 +12,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from wetclutch.errors import ParameterError, WetclutchError
-from wetclutch.measurement import DEFAULT_SENSORS, SensorSpec, measure, read_measurement, write_measurement
+from wetclutch.rig.files import read_measurement, write_measurement
+from wetclutch.rig.sensors import DEFAULT_SENSORS, SensorSpec, measure
 from wetclutch.output import atomic_dir
 
 

@@ -1,9 +1,9 @@
-"""Response metrics on synthetic signals with known answers (wetclutch.metrics)."""
+"""Response metrics on synthetic signals with known answers (wetclutch.launch.metrics)."""
 
 import numpy as np
 import pytest
 
-from wetclutch import metrics
+from wetclutch.launch import metrics
 
 DT = 1e-3
 T_REQ = 1.0

@@ -9,14 +9,16 @@ import sys
 import numpy as np
 import pytest
 
-from wetclutch import measurement, rig
+from wetclutch.report import rig as rig_report
+from wetclutch.rig import experiments as rig
+from wetclutch.rig import files as measurement
 
 
 @pytest.fixture(scope="module")
 def step_run(tmp_path_factory):
     res = rig.run("step", level=2.0, seed=3, t_end=4.0)
     out = tmp_path_factory.mktemp("rig") / "step"
-    rig.write(res, out)
+    rig_report.write(res, out)
     return res, out
 
 

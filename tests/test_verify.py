@@ -5,7 +5,8 @@ import shlex
 import numpy as np
 import pytest
 
-from wetclutch import cli, verify
+from wetclutch import cli
+from wetclutch.launch import verify
 from wetclutch.errors import WetclutchError
 
 

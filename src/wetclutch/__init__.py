@@ -4,7 +4,7 @@ The main entry points:
 
 * :func:`simulate` runs a named scenario and returns a :class:`Result`;
 * :class:`Params` / :func:`load_params` hold the validated parameter record;
-* :class:`wetclutch.network.Network` builds any rotational network for the engine.
+* :class:`wetclutch.sim.Network` builds any rotational network for the engine.
 """
 
 from . import _jitcache
@@ -14,7 +14,7 @@ _jitcache.ensure_consistent()  # before any compiled function loads from the cac
 from .errors import ParameterError, SimulationError, WetclutchError  # noqa: E402
 from .params import Params  # noqa: E402
 from .params import load as load_params  # noqa: E402
-from .scenarios import SCENARIOS, Result, simulate  # noqa: E402
+from .plant.scenarios import SCENARIOS, Result, simulate  # noqa: E402
 
 __all__ = [
     "SCENARIOS",

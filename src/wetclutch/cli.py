@@ -13,8 +13,7 @@ from typing import NoReturn
 
 from . import params as params_mod
 from .errors import WetclutchError
-from .output import atomic_dir, write_json
-from .scenarios import SCENARIOS, simulate
+from .plant.scenarios import SCENARIOS, simulate
 
 EXIT_USAGE = 2
 
@@ -42,18 +41,14 @@ def _load_params(args: argparse.Namespace) -> params_mod.Params:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> None:
-    from .plotting import plot_signals
+    from .report import scenario
 
     p = _load_params(args)
     if args.t_end is not None and not args.t_end > 0:
         raise WetclutchError(f"--t-end must be > 0 (got {args.t_end})")
     opts = {} if args.dt_out is None else {"dt_out": args.dt_out}
     res = simulate(args.scenario, p, args.t_end, **opts)
-    with atomic_dir(args.out) as d:
-        res.signals.to_csv(d / "signals.csv", index=False, float_format="%.10g")
-        write_json(d / "summary.json", {"scenario": res.scenario, **res.summary})
-        plot_signals(res.signals, res.scenario, d / "signals.png", title=f"wetclutch {res.scenario}")
-        (d / "params.toml").write_text(params_mod.to_toml(p))
+    scenario.write(res, args.out)
     s = res.summary
     line = f"{res.scenario}: {len(res.signals)} samples -> {args.out}"
     if s.get("t_sync") is not None:
@@ -91,37 +86,40 @@ def _cmd_params_export(args: argparse.Namespace) -> None:
 
 
 def _cmd_rig(args: argparse.Namespace) -> None:
-    from . import rig
+    from .report import rig as rig_report
+    from .rig import experiments as rig
 
     p = _load_params(args)
     res = rig.run(
         args.experiment, p, input_mode=args.input_mode, level=args.level, from_=args.from_, oil_temp_C=args.oil_temp,
         config=args.config, rate_hz=args.rate, seed=args.seed, noise=not args.no_noise, t_end=args.t_end,
     )
-    rig.write(res, args.out)
+    rig_report.write(res, args.out)
     m = res.measured
     extra = f"; t_sync = {res.meta['t_sync']:.3f} s" if res.meta["t_sync"] is not None else ""
     print(f"rig {args.experiment}: {len(m)} samples at {args.rate:g} Hz, {m.time.iloc[-1]:.2f} s -> {args.out}{extra}")
 
 
 def _cmd_calibration(args: argparse.Namespace) -> None:
-    from . import calibration
+    from .report import calibration as calibration_report
+    from .rig import calibration
 
     figs = calibration.run(_load_params(args))
-    calibration.write_report(figs, args.out)
+    calibration_report.write(figs, args.out)
     for f in figs:
         print(f"{'pass' if f.passed else 'FAIL'}  {f.name}")
     print(f"{sum(f.passed for f in figs)} of {len(figs)} figures within tolerance -> {args.out}/report.md")
 
 
 def _cmd_launch(args: argparse.Namespace) -> None:
-    from . import launch
+    from .launch import loop as launch
+    from .report import launch as launch_report
 
     p = _load_params(args)
     cond = launch.Conditions(t_ref=args.t_ref, profile=args.profile, oil_temp_C=args.oil_temp, seed=args.seed,
                              noise=not args.no_noise, noise_scale=args.noise_scale)
     res = launch.simulate(p, args.controller, cond)
-    launch.write(res, args.out, p)
+    launch_report.write(res, args.out, p)
     s = res.summary
     req = ", ".join(f"{k} {'pass' if v else 'FAIL'}" for k, v in s["requirements"].items())
     fmt = lambda v, f: "-" if v is None else format(v, f)  # noqa: E731
@@ -130,10 +128,11 @@ def _cmd_launch(args: argparse.Namespace) -> None:
 
 
 def _cmd_verify(args: argparse.Namespace) -> None:
-    from . import report, verify
+    from .launch import verify
+    from .report import verify as verify_report
 
     res = verify.run(args.samples, args.seed, args.workers, args.controller, progress=not args.quiet)
-    report.write_verify(res, args.out)
+    verify_report.write(res, args.out)
     rate = res["pass_rate_per_requirement"]
     print(f"verify {args.controller}: {res['cases']} launches, all three requirements in {100 * res['pass_rate']:.1f} % "
           f"(ess {100 * rate['steady_state_error']:.1f} %, t95 {100 * rate['response_time']:.1f} %, "
@@ -141,9 +140,11 @@ def _cmd_verify(args: argparse.Namespace) -> None:
 
 
 def _cmd_report(args: argparse.Namespace) -> None:
-    from . import report
+    from .launch import campaign
+    from .report import main as report
 
-    s = report.main_job(args.out, args.samples, args.baseline_samples, args.seed, args.workers, progress=not args.quiet)
+    job = campaign.main_job(args.samples, args.baseline_samples, args.seed, args.workers, progress=not args.quiet)
+    s = report.write(job, args.out)
     print(f"report: launch controller meets all requirements in {100 * s['verify']['pass_rate']:.1f} % of "
           f"{s['verify']['cases']} launches, PI baseline in {100 * s['verify_baseline']['pass_rate']:.1f} % "
           f"-> {args.out}/report.md")
@@ -153,7 +154,9 @@ def _cmd_identify(args: argparse.Namespace) -> None:
     from rich.console import Console
     from rich.progress import Progress
 
-    from . import channels, identify, identify_report
+    from .ident import identify
+    from .ident import recordings as channels
+    from .report import identify as identify_report
 
     prior = _load_params(args)
     cmap = channels.read_channel_map(args.channels)
@@ -164,7 +167,7 @@ def _cmd_identify(args: argparse.Namespace) -> None:
             bar.update(task, description=f"reading {f}")
             recs.append(channels.load(f, cmap))
             bar.advance(task)
-        res = identify.identify(recs, prior, args.mu_order,
+        res = identify(recs, prior, args.mu_order,
                                 progress=lambda name: bar.update(task, advance=1, description=f"identifying {name}"))
         bar.update(task, description=f"writing {args.out}")
         identify_report.write(res, args.out)
@@ -187,7 +190,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced as a whole)")
     sim.set_defaults(func=_cmd_simulate)
 
-    from .rig import EXPERIMENTS
+    from .rig.experiments import EXPERIMENTS
 
     rg = sub.add_parser("rig", help="run an experiment on the virtual test rig and write measurement files")
     rg.add_argument("experiment", choices=EXPERIMENTS)

@@ -32,7 +32,7 @@ Default values and why (see also ``docs/model.md``, "Default parameters"):
 * ``b_1`` 2e-5 and ``b_2`` 5e-5 N m s^2: windage of a disc flywheel, about
   0.45 N m at 150 rad/s on the primary.
 
-Valve and hydraulics, calibrated together against the study's figures (spec 6; see
+Valve and hydraulics, calibrated together against the study's figures (see
 :mod:`wetclutch.calibration` and ``docs/model.md``):
 
 * ``I_hyst`` 0.045 A: the magnet's hysteresis (a play on the coil current), about 3 % of
@@ -67,6 +67,17 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from .errors import ParameterError
 
+#: oil temperatures (C) at which the rig runs and the oil model holds; every oil temperature is checked against it
+OIL_TEMP_RANGE_C = (-30.0, 150.0)
+
+
+def check_oil_temp(temp_C: float, name: str) -> float:
+    """``temp_C`` if it lies within :data:`OIL_TEMP_RANGE_C`, else a one-line error naming ``name``."""
+    lo, hi = OIL_TEMP_RANGE_C
+    if not lo <= temp_C <= hi:
+        raise ParameterError(f"{name} {temp_C:g} C is outside {lo:g}..{hi:g} C")
+    return float(temp_C)
+
 
 def _f(default: float, unit: str, description: str, **bounds: float) -> Any:
     return Field(default, description=description, json_schema_extra={"unit": unit}, **bounds)
@@ -77,7 +88,7 @@ class _Section(BaseModel):
 
 
 class Driveline(_Section):
-    """Flywheels, CVT and flexible axle (spec section 2)."""
+    """Flywheels, CVT and flexible axle."""
 
     J_p: float = _f(1.2, "kg m^2", "primary flywheel inertia", gt=0.0, le=1e3)
     J_1: float = _f(1e-3, "kg m^2", "clutch output + CVT input inertia (neglected by the study)", gt=0.0, le=1e2)
@@ -111,7 +122,7 @@ class Engage(_Section):
 
 
 class Valve(_Section):
-    """Proportional pressure-reducing valve: electronics, coil, magnet, stem (spec section 5)."""
+    """Proportional pressure-reducing valve: electronics, coil, magnet, stem."""
 
     V_supply: float = _f(24.0, "V", "supply voltage of the valve amplifier / PWM stage", gt=0.0, le=100.0)
     R_coil: float = _f(6.0, "ohm", "coil resistance", gt=0.0, le=1e3)
@@ -138,7 +149,7 @@ class Valve(_Section):
 
 
 class Hydraulics(_Section):
-    """Supply, line, oil volume and piston of the clutch (spec sections 3 and 4)."""
+    """Supply, line, oil volume and piston of the clutch."""
 
     p_supply: float = _f(8e5, "Pa", "pump pressure (gauge)", gt=0.0, le=5e6)
     line_diameter: float = _f(4e-3, "m", "supply line diameter (laminar loss)", gt=0.0, le=0.1)
@@ -175,7 +186,8 @@ class Friction(_Section):
 class Rig(_Section):
     """Conditions of an experiment on the virtual rig."""
 
-    oil_temp_C: float = _f(85.0, "C", "oil temperature (held constant during a run)", ge=-30.0, le=150.0)
+    oil_temp_C: float = _f(85.0, "C", "oil temperature (held constant during a run)", ge=OIL_TEMP_RANGE_C[0],
+                          le=OIL_TEMP_RANGE_C[1])
 
 
 class Params(_Section):

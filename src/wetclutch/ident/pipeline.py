@@ -1,0 +1,132 @@
+"""Identification: from measurement files back to the clutch's parameters.
+
+Each estimator is a function over the arrays of checked recordings
+(:class:`wetclutch.ident.recordings.Recording`, SI units) that returns its value with a
+standard error and the files and time windows it came from (an :class:`Estimate`,
+or a small record per run). :func:`identify` runs all estimators that the
+recordings support:
+
+* torque onset after a command step: dead time and contact pressure (:func:`onset`);
+* friction versus slip from the slip phase of clutch runs (:func:`friction`), also
+  binned by pressure and by oil temperature;
+* static pressure versus command on the plateaus of steps and staircases, with the
+  hysteresis between up and down staircases (:func:`static_gain`, :func:`hysteresis`);
+* low-order pressure models fitted to steps and relaxations (:func:`step_models`)
+  and the frequency response from noise, multisine and chirp runs
+  (:func:`frequency_response`), as python-control LTI objects;
+* driveline resonance and damping from the ring-out after synchronisation (:func:`resonance`);
+* validation of the friction law and of the pressure model on each file left out
+  of the fit (:func:`wetclutch.ident.validation.validate`).
+
+The rig's sensors low-pass filter their signals (:data:`wetclutch.rig.sensors.DEFAULT_SENSORS`,
+assumed for any rig); each channel is advanced by its filter's low-frequency group
+delay before channels are combined, so that fast transients do not pair a new
+pressure with an old torque.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from ..errors import WetclutchError
+from ..params import Params
+from ..physics import actuator
+from .dynamics import frequency_response, step_models
+from .estimate import Estimate, source, weighted_mean
+from .friction import SLIP_MIN, friction, measured_ratio, slip_samples
+from .onset import onset
+from .recordings import Recording
+from .result import Identification, identified_params
+from .ringing import resonance
+from .static import GAIN_GROUPS, hysteresis, plateaus, static_gain
+from .validation import validate
+
+
+def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_order: int = 2,
+             progress: Callable[[str], None] | None = None) -> Identification:
+    """Run every estimator the recordings support (see the module docstring).
+
+    Parameters
+    ----------
+    recordings
+        Checked recordings (:func:`wetclutch.channels.load`).
+    prior
+        Parameters not identified here (piston area, efficiency, friction knee,
+        inertias ...) and the base of the identified parameter set; defaults if None.
+    mu_order
+        Order of the ``mu(slip)`` polynomial.
+    progress
+        Called with a short description before each file's work.
+
+    Raises
+    ------
+    WetclutchError
+        No recordings, or an order out of range.
+    """
+    prior = prior or Params()
+    if not recordings:
+        raise WetclutchError("no measurement files to identify")
+    if not 0 <= mu_order <= 7:
+        raise WetclutchError(f"--mu-order must be 0..7 (got {mu_order})")
+    est: dict[str, Estimate] = {}
+    onsets, steps, responses, ringings, points = [], [], [], [], []
+    for rec in recordings:
+        if progress:
+            progress(rec.path.name)
+        if (o := onset(rec)) is not None:
+            onsets.append(o)
+        steps += step_models(rec)
+        if (fr := frequency_response(rec)) is not None:
+            responses.append(fr)
+        if (rg := resonance(rec)) is not None:
+            ringings.append(rg)
+        points += plateaus(rec)
+
+    if onsets:
+        m, se = weighted_mean(np.array([o.p_contact for o in onsets]), np.array([o.p_contact_se for o in onsets]))
+        est["contact_pressure_Pa"] = Estimate(m, se, "Pa", [source(o.rec, o.t_command, o.t_command + o.dead_time)
+                                                            for o in onsets])
+    p_contact = est["contact_pressure_Pa"].value if onsets else actuator.contact_pressure(prior)
+    by_rec = {id(o.rec): o for o in onsets}
+    slips = [s for rec in recordings if (s := slip_samples(rec, prior, p_contact, by_rec.get(id(rec)))) is not None]
+    if slips:
+        est["mu_slip_poly"] = friction(slips, mu_order)
+    ratios = [(measured_ratio(r), r) for r in recordings if r.config == "clutch"]
+    ratios = [(v, r) for v, r in ratios if np.isfinite(v[0])]
+    if ratios:
+        m, se = weighted_mean(np.array([v[0] for v, _ in ratios]), np.array([v[1] for v, _ in ratios]))
+        est["ratio"] = Estimate(m, se, "-", [source(r, r.t[0], r.t[-1]) for _, r in ratios])
+    drags = [(o, s) for o in onsets for s in slips if s.rec is o.rec and o.slip0 > SLIP_MIN]
+    if drags:
+        # open-clutch oil drag: T_r before the onset, back through the CVT, per rad/s of slip
+        est["oil_drag_Nms"] = Estimate(
+            [float(o.baseline * s.ratio / prior.driveline.eta / o.slip0) for o, s in drags],
+            [float(o.noise * s.ratio / prior.driveline.eta / o.slip0 / np.sqrt(500.0)) for o, s in drags],
+            "N m s (one value per run, in file order)", [source(o.rec, o.t_command - 0.5, o.t_command) for o, _ in drags],
+            {"oil_temp_C": [o.rec.oil_temp_C for o, _ in drags]})
+    for key, (config, mode, order) in GAIN_GROUPS.items():
+        group = [q for q in points if q.rec.config == config and q.rec.input_mode == mode]
+        if (g := static_gain(group, order)) is not None:
+            est[key] = g
+        if config == "valve-only" and mode == "pwm" and (h := hysteresis(group)) is not None:
+            est["valve_hysteresis_bar"] = h
+    if "valve_gain_poly" in est:
+        v = est["valve_gain_poly"]
+        est["valve_gain"] = Estimate({"slope_bar_per_duty": v.value[0], "offset_bar": v.value[1]},
+                                     {"slope_bar_per_duty": v.se[0], "offset_bar": v.se[1]}, "bar", v.sources)
+    if ringings:
+        f, fse = weighted_mean(np.array([r.freq for r in ringings]), np.array([r.freq_se for r in ringings]))
+        z, zse = weighted_mean(np.array([r.zeta for r in ringings]), np.array([r.zeta_se for r in ringings]))
+        src = [source(r.rec, r.t0, r.t1) for r in ringings]
+        est["resonance_Hz"] = Estimate(f, fse, "Hz (damped)", src)
+        est["damping_ratio"] = Estimate(z, zse, "-", src)
+    temps = [r.oil_temp_C for r in recordings if r.config == "clutch"] or [r.oil_temp_C for r in recordings]
+    est["oil_temp_C"] = Estimate(float(np.median(temps)), float(np.std(temps)), "C (median over the runs)",
+                                 [source(r, r.t[0], r.t[-1]) for r in recordings])
+    identified = identified_params(prior, est)
+    result = Identification(list(recordings), prior, est, onsets, slips, points, steps, responses, ringings, [],
+                            identified)
+    result.validation = validate(result)
+    return result

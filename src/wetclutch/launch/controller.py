@@ -1,0 +1,362 @@
+"""Discrete-time torque controllers for a launch from standstill.
+
+The controllers see only what the rig measures (``T_r``, speeds, ``p_clutch``,
+``oil_temp``, after the sensor chain) and act on the valve's DC input ``u``
+(V, within the amplifier's range). Each controller is a compiled step function
+over a flat record of its settings (``ctrl``) and its own state vector
+(``cs``), called once per sample by the closed loop (:mod:`wetclutch.launch.loop`).
+This module names the slots of both and alone packs a record (:func:`pack_launch`,
+:func:`pack_pi`); the settings and their design live in :mod:`wetclutch.launch.design`.
+
+``launch`` (the design)
+    Why each part is there:
+
+    * **Fill and hold at the kiss point.** The fill dead time (0.1 to 0.5 s) is
+      longer than the 0.2 s response asked for, so the clutch cannot answer from
+      empty. As automatic transmissions do, the launch strategy fills the
+      clutch while the car waits: full input until the measured pressure is
+      ``fill_exit`` below the kiss point (the piston has stroked most of its way;
+      in the stroke the pressure is the reset spring's force over the piston
+      area, so it measures the piston's position), then a pressure set point
+      that rises at ``hold_rate`` to ``hold_offset`` above the kiss point. The
+      plates then just touch: at that low normal force friction is small (the
+      friction knee), so only a creep torque of a few N m flows, which the road
+      load holds. Holding *at* rather than *below* the kiss point matters: once
+      the plates touch, the oil volume becomes a thousand times stiffer than the
+      reset spring, and a valve opened wide to stroke the piston then slams the
+      pressure towards the supply. The kiss point (contact pressure) comes from
+      identification (``wetclutch identify`` estimates it as the pressure at
+      torque onset) or the parameter set; ``hold_offset`` covers a kiss-point
+      error of that size.
+    * **Feedforward through the inverse static map.** The torque request is
+      turned into a pressure through the nominal friction law
+      (``T_c = T_r i / eta``, ``F_n = T_c / mu(slip)``, ``p = p_kiss + F_n / A_p``)
+      and the pressure into a voltage through the inverse of the clutch's
+      static pressure-vs-voltage map at the measured oil temperature
+      (gain scheduling on temperature: the map is tabulated over 20 to 100 C).
+    * **Feedback on pressure and on torque.** A PI loop on the measured pressure
+      removes static-map errors. Friction differs from unit to unit by some
+      20 %; an integrator alone would take too long to make that up within
+      0.2 s, so the controller also estimates a friction factor ``theta`` (the
+      measured ``T_r`` over the nominal model's torque at the measured pressure,
+      low-pass filtered) and scales its friction law by it: an adaptive
+      feedforward. An integrator on the torque error removes what is left
+      (efficiency, kiss-point error). The slip in ``mu(slip)`` comes from the
+      primary and secondary flywheels, whose speeds are smooth.
+    * **Dither.** In DC mode nothing shakes the valve stem, whose friction then
+      makes the pressure stall in steps (the study's reason for PWM); worse, the
+      magnet's hysteresis is a play of some 0.225 V of input, and after each
+      reversal the input has to cross all of it before the force moves: with a
+      pressure integrator slow enough for the hold, the pressure rose in
+      staircases of 20 to 60 ms, which made the response time vary from launch
+      to launch. Once torque is requested the input therefore carries a
+      square-wave dither *wider* than the play (0.3 V at 125 Hz): the iron then
+      follows the mean coil current (the play is dithered out as a backlash is)
+      and the stem never sticks; the feedforward is shifted by the play, since
+      the map was measured on the rising branch and the dithered magnet works
+      on the centre line. The pressure integrator is faster then than in the
+      hold. Before the request (and until the fill is complete) the dither
+      stays small (0.05 V, inside the play): with the stem near its overlap a
+      wide dither pumps oil in, because the supply drives the inflow with
+      several bar and the drain only with the clutch pressure, and the
+      pressure would creep up and slam at contact.
+    * **A request during the fill.** If the request comes before the filtered
+      pressure has reached the hold (cold oil, a long line, a late kiss point),
+      the gentle, lead-limited approach of the hold would crawl; the set point
+      then jumps to ``req_lead`` above the hold so that the valve opens and the
+      fill completes: a jolt at contact is then only the torque arriving. The
+      request itself waits until the fill is complete (latched, so that noise
+      on the filtered pressure cannot stop it again).
+    * **Anti-windup.** Both integrators stop when the input saturates in the
+      direction that would wind them further (conditional integration), and
+      the pressure target is limited to the supply pressure.
+
+``pi`` (the baseline)
+    A plain PI controller on ``T_r`` from the torque request on, with the valve
+    at its lowest input before: no fill, no feedforward, no anti-windup.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..physics import friction
+
+_jit = njit(cache=True, error_model="numpy", _nrt=False)
+_inline = njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+
+CONTROLLERS = ("launch", "pi")
+
+#: measured channels, in the order the closed loop passes them (SI; oil temperature in C)
+MEASURED = ("p_clutch", "T_r", "omega_p", "omega_1", "omega_r", "omega_s", "oil_temp")
+M_P, M_TR, M_WP, M_W1, M_WR, M_WS, M_TEMP = range(len(MEASURED))
+
+# --- controller record: common fields
+KIND, DT, U_MIN, U_MAX = range(4)
+LAUNCH, PI = 0, 1
+# launch controller
+(P_KISS, HOLD_OFFSET, FILL_EXIT, A_P, RATIO, ETA, MU2, MU1, MU0, F_KNEE, KP_P, KI_P, KP_T, KI_T, P_MAX, TAU_REF,
+ HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, HOLD_LEAD, FILL_EXIT_COLD, FF_T0, FF_DT,
+ FF_NT, FF_P0, FF_DP, FF_NP, KI_HOLD, DITHER_AMP_T, DITHER_HALF_T, FF_SHIFT_T, REQ_LEAD) = range(4, 41)
+FF_TABLE = 41  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
+N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power first
+# PI baseline (shares the slots after the common fields)
+KP_B, KI_B = 4, 5
+N_PI = 8
+
+# --- controller state
+CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED = range(11)
+N_CS = 11
+FILL, HOLD, TORQUE, LOCKUP = 0, 1, 2, 3
+SYNC_SLIP = 2.0  # rad/s: measured slip below which the clutch counts as synchronised
+
+
+@_inline
+def _table(ctrl, temp, p):
+    """Bilinear interpolation of the feedforward voltage at (oil temperature, pressure)."""
+    nt = int(ctrl[FF_NT])
+    npp = int(ctrl[FF_NP])
+    ft = min(max((temp - ctrl[FF_T0]) / ctrl[FF_DT], 0.0), nt - 1.0)
+    fp = min(max((p - ctrl[FF_P0]) / ctrl[FF_DP], 0.0), npp - 1.0)
+    it = min(int(ft), nt - 2)
+    ip = min(int(fp), npp - 2)
+    at = ft - it
+    ap = fp - ip
+    b = FF_TABLE + it * npp + ip
+    lo = (1.0 - ap) * ctrl[b] + ap * ctrl[b + 1]
+    hi = (1.0 - ap) * ctrl[b + npp] + ap * ctrl[b + npp + 1]
+    return (1.0 - at) * lo + at * hi
+
+
+@_inline
+def _mu(ctrl, slip):
+    return max(friction.mu(ctrl[MU2:MU0 + 1], slip), 1e-4)
+
+
+@_inline
+def _pressure_target(ctrl, t_ref, slip, theta):
+    """Pressure (Pa) that gives axle torque ``t_ref`` under the nominal friction law scaled by ``theta``."""
+    mu = _mu(ctrl, slip) * theta
+    t_c = max(t_ref, 0.0) * ctrl[RATIO] / ctrl[ETA]
+    f_n = friction.force_for(t_c / mu, ctrl[F_KNEE])
+    return ctrl[P_KISS] + f_n / ctrl[A_P]
+
+
+@_inline
+def _fill_exit(ctrl, temp):
+    """How far below the kiss point the full-input fill ends, Pa: scheduled on oil temperature, since cold
+    oil strokes the piston slowly through the viscous line and the fill may then run closer."""
+    a = min(max((temp - 20.0) / 65.0, 0.0), 1.0)
+    return (1.0 - a) * ctrl[FILL_EXIT_COLD] + a * ctrl[FILL_EXIT]
+
+
+@_inline
+def _hold_setpoint(ctrl, cs, dt, p_hold):
+    """The hold's pressure set point: rising at ``HOLD_RATE`` to the hold pressure, never far above the pressure
+    there is (a valve set far above the stroke pressure opens wide and slams the pressure up when the plates touch)."""
+    cs[CS_PSET] = min(cs[CS_PSET] + ctrl[HOLD_RATE] * dt, p_hold)
+    return min(cs[CS_PSET], cs[CS_PF] + ctrl[HOLD_LEAD])
+
+
+@_inline
+def _friction_estimate(ctrl, cs, meas, p, slip, dt):
+    """Low-pass the friction factor: measured torque over the nominal model's at the measured pressure, once the
+    plates press hard enough for the ratio to mean something."""
+    f_n = friction.normal_force(p, ctrl[P_KISS], ctrl[A_P])
+    if f_n > ctrl[F_KNEE] * 1.5:
+        t_model = ctrl[ETA] / ctrl[RATIO] * _mu(ctrl, slip) * f_n * friction.knee(f_n, ctrl[F_KNEE])
+        theta = min(max(meas[M_TR] / t_model, 0.5), 2.0)
+        cs[CS_THETA] += (theta - cs[CS_THETA]) * dt / (ctrl[TAU_THETA] + dt)
+
+
+@_inline
+def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
+    """The pressure set point once torque is requested, and whether the request still waits for the fill."""
+    p = meas[M_P]
+    # until the fill is complete (cold oil, long line) the request waits, and the
+    # integrator with it: it would only wind up against a clutch that cannot answer yet
+    # (latched: once filled, noise on the filtered pressure must not stop the request again)
+    gated = cs[CS_FILLED] == 0.0 and cs[CS_PF] < p_hold
+    if not gated:
+        cs[CS_FILLED] = 1.0
+        # the request through a first-order prefilter: a torque step through the valve's
+        # fast, underdamped pressure response would jolt the driveline
+        cs[CS_REF] += (t_ref - cs[CS_REF]) * dt / (ctrl[TAU_REF] + dt)
+    r = cs[CS_REF]
+    e_t = r - meas[M_TR]
+    # slip from the secondary flywheel, not from omega_1: the light CVT input shakes
+    # with the clutch torque, and feeding that back through mu(slip) closes a fast loop
+    slip = meas[M_WP] - meas[M_WS] / ctrl[RATIO]
+    _friction_estimate(ctrl, cs, meas, p, slip, dt)
+    th = cs[CS_THETA]
+    p_r = _pressure_target(ctrl, r, slip, th)
+    sens = _pressure_target(ctrl, r + 1.0, slip, th) - p_r  # Pa per N m
+    p_set = p_r + cs[CS_ZT] + ctrl[KP_T] * sens * e_t
+    p_set = min(max(p_set, p_hold), ctrl[P_MAX])
+    if gated:
+        # finish the fill; with the request there a jolt at contact is wanted rather than
+        # feared, so the set point may lead the measured pressure further than in the hold
+        p_set = p_hold + ctrl[REQ_LEAD]
+    u_prev = cs[CS_U]
+    wind_up = gated or (u_prev >= ctrl[U_MAX] and e_t > 0.0) or (u_prev <= ctrl[U_MIN] and e_t < 0.0)
+    if not wind_up:
+        cs[CS_ZT] += ctrl[KI_T] * sens * e_t * dt
+    return p_set
+
+
+@_inline
+def _pressure_loop(ctrl, cs, p_set, p, temp, hold, dt):
+    """Feedforward through the inverse static map plus PI on pressure, with conditional-integration anti-windup."""
+    e_p = p_set - p
+    # in the hold the plates have just touched; an overshoot there would leave the
+    # stem in its overlap with the pressure trapped high, so push back harder
+    kp = ctrl[KP_HOLD] if hold else ctrl[KP_P]
+    ki = ctrl[KI_HOLD] if hold else ctrl[KI_P]
+    # with the torque dither wider than the magnet's play the iron follows the mean
+    # current, not the rising branch the map was measured on: shift the map by the play
+    shift = 0.0 if hold else ctrl[FF_SHIFT_T]
+    u = _table(ctrl, temp, p_set) - shift + cs[CS_ZP] + kp * e_p
+    if u > ctrl[U_MAX]:
+        u = ctrl[U_MAX]
+        if e_p < 0.0:
+            cs[CS_ZP] += ki * e_p * dt
+    elif u < ctrl[U_MIN]:
+        u = ctrl[U_MIN]
+        if e_p > 0.0:
+            cs[CS_ZP] += ki * e_p * dt
+    else:
+        cs[CS_ZP] += ki * e_p * dt
+    cs[CS_U] = u
+    return u
+
+
+@_inline
+def _dither(ctrl, cs, u, hold):
+    """A square-wave dither on top: it keeps the valve stem from sticking (the DC drive lacks the dither that
+    PWM gives); the integrators do not see it."""
+    k = int(cs[CS_K])
+    cs[CS_K] = k + 1
+    if hold:
+        amp, half = ctrl[DITHER_AMP], max(int(ctrl[DITHER_HALF]), 1)
+    else:
+        amp, half = ctrl[DITHER_AMP_T], max(int(ctrl[DITHER_HALF_T]), 1)
+    d = amp if (k // half) % 2 == 0 else -amp
+    return min(max(u + d, ctrl[U_MIN]), ctrl[U_MAX])
+
+
+@_jit
+def _launch(ctrl, cs, meas, t_ref):
+    dt = ctrl[DT]
+    p = meas[M_P]
+    temp = meas[M_TEMP]
+    phase = int(cs[CS_PHASE])
+    p_hold = ctrl[P_KISS] + ctrl[HOLD_OFFSET]
+    # pressure averaged over some 20 ms: the fill decisions must not trip on sensor noise
+    cs[CS_PF] = p if cs[CS_K] == 0.0 else cs[CS_PF] + (p - cs[CS_PF]) * dt / (0.02 + dt)
+    if phase == FILL:
+        if p < ctrl[P_KISS] - _fill_exit(ctrl, temp):
+            cs[CS_U] = ctrl[U_MAX]
+            return ctrl[U_MAX]
+        # the piston has stroked most of the way: approach the kiss point gently, since
+        # reaching the plates with the valve wide open would jolt the pressure up
+        phase = HOLD
+        cs[CS_PSET] = p
+        cs[CS_DIP] = ctrl[DIP_N]
+    if phase == HOLD and cs[CS_DIP] > 0.0:
+        # after the full-input fill the magnet sits on the descending branch of its
+        # hysteresis and would hold the valve open; a short dip of the input brings it
+        # onto the rising branch, which the feedforward map describes
+        cs[CS_DIP] -= 1.0
+        cs[CS_PHASE] = phase
+        u = max(_table(ctrl, temp, p_hold) - ctrl[DIP], ctrl[U_MIN])
+        cs[CS_U] = u
+        return u
+    if phase == HOLD and t_ref > 0.0:
+        phase = TORQUE
+        cs[CS_REF] = 0.0
+        cs[CS_THETA] = ctrl[THETA0]
+    if phase == TORQUE and abs(meas[M_WP] - meas[M_W1]) < SYNC_SLIP and meas[M_W1] > 0.0:
+        # synchronised: the clutch can carry no more torque; close it firmly
+        phase = LOCKUP
+    cs[CS_PHASE] = phase
+    if phase == LOCKUP:
+        cs[CS_U] = ctrl[U_MAX]
+        return ctrl[U_MAX]
+    if phase == HOLD:
+        p_set = _hold_setpoint(ctrl, cs, dt, p_hold)
+    else:
+        p_set = _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold)
+    # a request still waiting for the fill counts as hold here: its stem sits near
+    # the overlap, where a wide dither would pump oil in and slam the pressure up
+    hold = phase == HOLD or cs[CS_FILLED] == 0.0
+    u = _pressure_loop(ctrl, cs, p_set, p, temp, hold, dt)
+    return _dither(ctrl, cs, u, hold)
+
+
+@_jit
+def _pi(ctrl, cs, meas, t_ref):
+    if t_ref <= 0.0:
+        return ctrl[U_MIN]
+    e = t_ref - meas[M_TR]
+    cs[CS_ZT] += ctrl[KI_B] * e * ctrl[DT]
+    return min(max(ctrl[KP_B] * e + cs[CS_ZT], ctrl[U_MIN]), ctrl[U_MAX])
+
+
+@_jit
+def step(ctrl, cs, meas, t_ref):
+    """One controller sample: measured channels ``meas`` and request ``t_ref`` (N m) -> input (V)."""
+    if int(ctrl[KIND]) == PI:
+        return _pi(ctrl, cs, meas, t_ref)
+    return _launch(ctrl, cs, meas, t_ref)
+
+
+# ------------------------------------------------------------------ packing
+
+
+def _common(r: np.ndarray, kind: int, dt: float, u_range: tuple[float, float]) -> np.ndarray:
+    r[KIND], r[DT] = kind, dt
+    r[U_MIN], r[U_MAX] = u_range
+    return r
+
+
+def pack_pi(kp: float, ki: float, dt: float, u_range: tuple[float, float]) -> np.ndarray:
+    """The PI baseline's record: ``u = kp e + ki int(e)`` (V/N m, V/(N m s)), input limits ``u_range`` (V)."""
+    r = np.zeros(N_PI)
+    r[KP_B], r[KI_B] = kp, ki
+    return _common(r, PI, dt, u_range)
+
+
+def pack_launch(s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pressures: np.ndarray, table: np.ndarray,
+                dt: float, u_range: tuple[float, float]) -> np.ndarray:
+    """The launch controller's record.
+
+    Parameters
+    ----------
+    s
+        The settings by name (SI; :class:`wetclutch.launch.design.LaunchDesign`): ``p_kiss``, ``a_p``,
+        ``ratio``, ``eta``, ``f_knee``, ``p_max``, ``ff_shift`` and the gains of
+        :class:`wetclutch.launch.design.LaunchGains` with the dither frequencies and dip time
+        as sample counts already (``dither_half``, ``dither_half_torque``, ``dip_n``).
+    mu
+        The friction law's ``mu(slip)`` coefficients, highest power first, at most :data:`N_MU`.
+    temps, pressures, table
+        The feedforward map: input voltage (V) at each (oil temperature C, pressure Pa) on
+        uniform grids.
+    """
+    r = np.zeros(FF_TABLE + table.size)
+    slots = {P_KISS: "p_kiss", HOLD_OFFSET: "hold_offset", FILL_EXIT: "fill_exit", A_P: "a_p", RATIO: "ratio",
+             ETA: "eta", F_KNEE: "f_knee", KP_P: "kp_p", KI_P: "ki_p", KP_T: "kp_t", KI_T: "ki_t", P_MAX: "p_max",
+             TAU_REF: "tau_ref", HOLD_RATE: "hold_rate", TAU_THETA: "tau_theta", THETA0: "theta0",
+             DITHER_AMP: "dither_amp", DITHER_HALF: "dither_half", KP_HOLD: "kp_hold", DIP: "dip", DIP_N: "dip_n",
+             HOLD_LEAD: "hold_lead", FILL_EXIT_COLD: "fill_exit_cold", KI_HOLD: "ki_hold",
+             DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque", FF_SHIFT_T: "ff_shift",
+             REQ_LEAD: "req_lead"}
+    for slot, name in slots.items():
+        r[slot] = s[name]
+    r[MU2:MU0 + 1] = 0.0
+    r[MU0 + 1 - len(mu):MU0 + 1] = mu
+    r[FF_T0], r[FF_DT], r[FF_NT] = temps[0], temps[1] - temps[0], temps.size
+    r[FF_P0], r[FF_DP], r[FF_NP] = pressures[0], pressures[1] - pressures[0], pressures.size
+    r[FF_TABLE:] = table.ravel()
+    return _common(r, LAUNCH, dt, u_range)

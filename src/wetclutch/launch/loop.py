@@ -1,0 +1,279 @@
+"""A controlled launch from standstill on the virtual rig.
+
+The rig of :mod:`wetclutch.plant.clutch` (primary at 150 rad/s, secondary at rest,
+brake as road load) runs in closed loop with a discrete controller of
+:mod:`wetclutch.launch.controller`: every sample (1 kHz by default) the true signals
+pass through the rig's sensor chain (:mod:`wetclutch.rig.sensors`: low-pass filter,
+noise, quantisation, low-speed dropout), the controller computes the valve's DC input,
+and the engine advances to the next sample. The whole loop runs compiled
+(:func:`_closed_loop`); Python only prepares arrays and reads the results.
+
+The clutch is in standby from t = 0; the torque request comes at
+``t_request`` (1 s); the run goes on through synchronisation and stops
+``t_after`` seconds after the clutch has locked for good (or at ``t_max``).
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from numba import njit
+
+from ..errors import SimulationError, WetclutchError
+from ..params import Params, check_oil_temp
+from ..physics import actuator
+from ..plant import clutch
+from ..rig.sensors import filter_sample, reading, sensor_table
+from ..sim.integrator import advance
+from ..sim.network import Trajectory, failure, outputs
+from ..sim.rhs import spring_torque
+from ..sim.signals import External
+from ..sim.workspace import IS_SETTLE, LOCKED, OK, new_workspace
+from . import controller as control
+from . import design as design_
+from . import metrics
+
+_jit = njit(cache=True, error_model="numpy")
+
+PROFILES = ("step", "ramp")
+RAMP_TIME = 0.3  # s: a ``ramp`` request rises over this time
+N_CH = len(control.MEASURED)
+
+#: where the loop finds the measured quantities: state indices (pressure, speeds) and the axle spring,
+#: in the slots of the controller's measured channels (the oil temperature is a constant of the run)
+N_PROBE = N_CH - 1
+
+
+def _probe(rn: clutch.RigNetwork) -> np.ndarray:
+    net = rn.network
+    body = {b.name: i for i, b in enumerate(net.bodies)}
+    probe = np.zeros(N_PROBE, dtype=np.int64)
+    probe[control.M_P] = rn.i_pressure
+    probe[control.M_TR] = next(i for i, s in enumerate(net.springs) if s.name == "axle")
+    probe[control.M_WP], probe[control.M_W1] = body["p"], body["1"]
+    probe[control.M_WR], probe[control.M_WS] = body["r"], body["s"]
+    return probe
+
+
+@_jit
+def _true_values(net, x, probe, temp, truth):
+    truth[control.M_P] = x[probe[control.M_P]]
+    truth[control.M_TR] = spring_torque(net, probe[control.M_TR], x)[0]
+    for c in (control.M_WP, control.M_W1, control.M_WR, control.M_WS):
+        truth[c] = x[probe[c]]
+    truth[control.M_TEMP] = temp
+
+
+@_jit
+def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, t_ref, dt, t_after,
+                 out_t, out_x, out_aux, out_mode, out_meas, out_u):
+    """Run the sampled loop; returns (status, number of samples)."""
+    n = t_ref.shape[0]
+    truth = np.zeros(N_CH)
+    meas = np.zeros(N_CH)
+    zf = np.zeros((N_CH, 2))
+    t_lock = -1.0
+    for k in range(n):
+        _true_values(net, ws.x, probe, temp, truth)
+        for c in range(N_CH):
+            v = filter_sample(sensors[c], zf[c], truth[c], k == 0)
+            meas[c] = reading(sensors[c], v, noise[k, c])
+            out_meas[k, c] = meas[c]
+        u = control.step(ctrl, cs, meas, t_ref[k])
+        out_u[k] = u
+        ext[u_slot] = u
+        ws.istate[IS_SETTLE] = 1
+        status = advance(net, ext, ws, (k + 1) * dt, dt, 0.0, 1e-6, 1e-9, np.inf, out_t, out_x, out_aux, out_mode)
+        if status != OK:
+            return status, k
+        if ws.clm[0] == LOCKED:
+            if t_lock < 0.0:
+                t_lock = (k + 1) * dt
+            elif (k + 1) * dt - t_lock >= t_after:
+                return OK, k + 1
+        else:
+            t_lock = -1.0
+    return OK, n
+
+
+@dataclass(frozen=True)
+class Conditions:
+    """One launch: the request and the conditions it meets.
+
+    Attributes
+    ----------
+    t_ref : float
+        Requested axle torque ``T_r``, N m.
+    profile : str or Path
+        ``step``, ``ramp`` (linear over :data:`RAMP_TIME`), or a CSV file with
+        columns ``time`` (s, from the request) and ``t_ref`` (N m).
+    oil_temp_C : float or None
+        Oil temperature, C (None: the parameter set's ``rig.oil_temp_C``).
+    """
+
+    t_ref: float = 100.0
+    profile: str = "step"
+    oil_temp_C: float | None = None
+    t_request: float = 1.0
+    t_after: float = 0.5
+    t_max: float = 12.0
+    dt: float = 1e-3
+    seed: int = 0
+    noise: bool = True
+    noise_scale: float = 1.0
+
+    def checked(self) -> Conditions:
+        if not 0.0 < self.t_ref <= 1000.0:
+            raise WetclutchError(f"--t-ref must be in (0, 1000] N m (got {self.t_ref:g})")
+        if self.oil_temp_C is not None:
+            check_oil_temp(self.oil_temp_C, "--oil-temp")
+        if self.profile not in PROFILES and not Path(self.profile).is_file():
+            raise WetclutchError(f"--profile must be step, ramp or an existing CSV file (got '{self.profile}')")
+        if self.seed < 0:
+            raise WetclutchError(f"--seed must be >= 0 (got {self.seed})")
+        if not 0.0 <= self.noise_scale <= 10.0:
+            raise WetclutchError(f"--noise-scale must be in 0..10 (got {self.noise_scale:g})")
+        if not 1e-4 <= self.dt <= 1e-2:
+            raise WetclutchError(f"controller sample time must be in 0.1..10 ms (got {self.dt * 1e3:g} ms)")
+        if not self.t_request + 0.5 < self.t_max <= 120.0:
+            raise WetclutchError(f"t_max must be in (t_request + 0.5, 120] s (got {self.t_max:g})")
+        return self
+
+
+def reference(cond: Conditions, t: np.ndarray) -> np.ndarray:
+    """The torque request on the sample times ``t`` (zero before the request)."""
+    tau = t - cond.t_request
+    if cond.profile == "step":
+        r = np.full(t.size, cond.t_ref)
+    elif cond.profile == "ramp":
+        r = cond.t_ref * np.clip(tau / RAMP_TIME, 0.0, 1.0)
+    else:
+        try:
+            f = pd.read_csv(cond.profile)
+            tt = np.asarray(f["time"], dtype=float)
+            rr = np.asarray(f["t_ref"], dtype=float)
+        except (OSError, KeyError, ValueError, pd.errors.ParserError) as e:
+            raise WetclutchError(f"--profile {cond.profile}: needs numeric columns 'time' and 't_ref' ({type(e).__name__})") from None
+        if tt.size < 2 or not np.all(np.isfinite(tt)) or not np.all(np.isfinite(rr)) or np.any(np.diff(tt) <= 0):
+            raise WetclutchError(f"--profile {cond.profile}: 'time' must increase and all values be finite")
+        if np.any(rr < 0) or np.any(rr > 1000):
+            raise WetclutchError(f"--profile {cond.profile}: 't_ref' must be in 0..1000 N m")
+        r = np.interp(tau, tt, rr)
+    return np.where(tau >= 0.0, r, 0.0)
+
+
+def reference(cond: Conditions, t: np.ndarray) -> np.ndarray:
+    """The torque request on the sample times ``t`` (zero before the request)."""
+    tau = t - cond.t_request
+    if cond.profile == "step":
+        r = np.full(t.size, cond.t_ref)
+    elif cond.profile == "ramp":
+        r = cond.t_ref * np.clip(tau / RAMP_TIME, 0.0, 1.0)
+    else:
+        try:
+            f = pd.read_csv(cond.profile)
+            tt = np.asarray(f["time"], dtype=float)
+            rr = np.asarray(f["t_ref"], dtype=float)
+        except (OSError, KeyError, ValueError, pd.errors.ParserError) as e:
+            raise WetclutchError(f"--profile {cond.profile}: needs numeric columns 'time' and 't_ref' ({type(e).__name__})") from None
+        if tt.size < 2 or not np.all(np.isfinite(tt)) or not np.all(np.isfinite(rr)) or np.any(np.diff(tt) <= 0):
+            raise WetclutchError(f"--profile {cond.profile}: 'time' must increase and all values be finite")
+        if np.any(rr < 0) or np.any(rr > 1000):
+            raise WetclutchError(f"--profile {cond.profile}: 't_ref' must be in 0..1000 N m")
+        r = np.interp(tau, tt, rr)
+    return np.where(tau >= 0.0, r, 0.0)
+
+
+@dataclass
+class LaunchResult:
+    """A launch: measured signals (plus ``t_ref`` and ``u``), true signals, and its figures."""
+
+    signals: pd.DataFrame
+    truth: pd.DataFrame
+    summary: dict[str, Any]
+    conditions: Conditions
+    controller: str
+    stats: dict[str, int] = field(default_factory=dict)
+
+
+def simulate(params: Params | None = None, controller: str = "launch", conditions: Conditions | None = None,
+             design: Params | None = None, gains: Any = None, nominal: metrics.Response | None = None) -> LaunchResult:
+    """Run one closed-loop launch.
+
+    Parameters
+    ----------
+    params
+        The rig as it really is (the study's defaults if None).
+    controller
+        ``launch`` or ``pi`` (see :mod:`wetclutch.launch.controller`).
+    conditions
+        Request, profile, oil temperature, noise seed.
+    design
+        The nominal parameter set the controller was designed on (default: the
+        defaults). Verification runs a controller designed on the defaults
+        against rigs that differ from them.
+    nominal
+        The nominal launch's response, for the robustness requirement (default:
+        computed on ``design`` at the design oil temperature).
+    """
+    p = params if params is not None else Params()
+    cond = (conditions or Conditions()).checked()
+    temp = p.rig.oil_temp_C if cond.oil_temp_C is None else float(cond.oil_temp_C)
+    ctrl = design_.record(controller, design or design_.design_params(p), gains, cond.dt)
+    rn = clutch.build(p, External(0), pwm=False, config="clutch", temp_C=temp)
+    net, x0, ext = rn.network.compile()
+    ws = new_workspace(net, x0)
+    n = int(round(cond.t_max / cond.dt))
+    t_grid = np.arange(n) * cond.dt
+    t_ref = reference(cond, t_grid)
+    probe = _probe(rn)
+    sensors = sensor_table(control.MEASURED, 1.0 / cond.dt, noise=cond.noise, noise_scale=cond.noise_scale)
+    rng = np.random.default_rng(cond.seed)
+    noise = rng.standard_normal((n, N_CH)) if cond.noise else np.zeros((n, N_CH))
+    out = outputs(n, x0.size, ws.aux.size, len(rn.network.clutches))
+    out_meas = np.zeros((n, N_CH))
+    out_u = np.zeros(n)
+    cs = np.zeros(control.N_CS)
+    status, m = _closed_loop(net, ext, ws, 0, probe, temp, sensors, noise, ctrl, cs, t_ref, cond.dt, cond.t_after,
+                             *out, out_meas, out_u)
+    if status != OK:
+        raise SimulationError(f"launch simulation failed: {failure(rn.network, ws, status)}")
+    tr = Trajectory.from_run(rn.network, ws, *out, m)
+    m = tr.t.size
+    signals = pd.DataFrame({"time": t_grid[:m], **{c: out_meas[:m, j] for j, c in enumerate(control.MEASURED)},
+                            "t_ref": t_ref[:m], "u": out_u[:m]})
+    w_p = tr.speed("p")
+    truth = pd.DataFrame({
+        "time": tr.t,
+        "p_clutch": tr.actuator_state(actuator.PRESSURE),
+        "T_r": tr.spring_torque("axle"),
+        "T_c": tr.clutch_torque("clutch"),
+        "slip": w_p - tr.speed("1"),
+        "omega_s": tr.speed("s"),
+        "locked": tr.locked("clutch"),
+        "E_clutch": tr.dissipated("clutch"),
+    })
+    t_sync = tr.sync_time("clutch")
+    resp = metrics.response(signals["time"].to_numpy(), signals["T_r"].to_numpy(), t_ref[:m], cond.t_request, t_sync)
+    if nominal is None:
+        nominal = nominal_response(controller, cond, gains)
+    summary = metrics.summary(resp, nominal, slip_energy=float(truth["E_clutch"].iloc[-1]), t_sync=t_sync)
+    summary.update(controller=controller, t_ref_Nm=cond.t_ref, profile=str(cond.profile), oil_temp_C=temp)
+    return LaunchResult(signals, truth, summary, cond, controller, tr.stats)
+
+
+@functools.lru_cache(maxsize=64)
+def _nominal(controller: str, cond: Conditions, gains: Any) -> metrics.Response:
+    res = simulate(Params(), controller, cond, gains=gains, nominal=metrics.Response.empty())
+    return metrics.response(res.signals["time"].to_numpy(), res.signals["T_r"].to_numpy(),
+                            res.signals["t_ref"].to_numpy(), cond.t_request, res.summary["t_sync_s"])
+
+
+def nominal_response(controller: str, cond: Conditions, gains: Any = None) -> metrics.Response:
+    """The response of the design rig (defaults, design oil temperature, same request) for comparison."""
+    return _nominal(controller, replace(cond, oil_temp_C=None, seed=0), gains)

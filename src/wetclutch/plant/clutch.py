@@ -1,0 +1,87 @@
+"""The whole clutch on the rig: driveline + valve stem + hydraulic actuator, from parameters.
+
+Two configurations, as in the study:
+
+``clutch``
+    The valve drives the clutch piston; the clutch capacity comes from the
+    pressure (``F_n``) and the friction law; the driveline of
+    :mod:`wetclutch.driveline` runs from 150 rad/s with the secondary at rest.
+``valve-only``
+    The study's valve test: the clutch is replaced by a downstream restriction
+    passing :data:`wetclutch.physics.actuator.VALVE_TEST_FLOW` at the supply pressure (continuous flow instead of a
+    dead-end volume); there is no driveline. The valve sits on the test bench's
+    pump directly: the clutch installation's feed line and feed restriction
+    (``hydraulics.line_*``, ``hydraulics.feed_orifice``), which could not pass 32 l/min
+    at 8 bar, are not part of this test, nor are the clutch's seal rings (no seal leakage).
+
+The oil temperature is a parameter of the experiment (``rig.oil_temp_C``); the
+oil's viscosity (supply line loss, leakage, open-clutch drag), density and bulk
+modulus follow from :mod:`wetclutch.oil`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..params import Params
+from ..physics import actuator as A
+from ..physics import oil
+from ..physics.actuator import CONFIGS
+from ..sim.network import GROUND, Network, integrate
+from ..sim.signals import Const, Signal
+from . import driveline
+
+@dataclass(frozen=True)
+class RigNetwork:
+    """A rig network and where its measured quantities live in the state vector."""
+
+    network: Network
+    config: str
+    temp_C: float
+
+    @property
+    def i_current(self) -> int:
+        return self.network.actuator_state + A.CURRENT
+
+    @property
+    def i_pressure(self) -> int:
+        return self.network.actuator_state + A.PRESSURE
+
+
+def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str = "clutch", temp_C: float | None = None) -> RigNetwork:
+    """The rig network driven by input ``u`` (V in DC mode, duty in PWM mode)."""
+    if config not in CONFIGS:
+        raise ValueError(f"config must be one of {CONFIGS}")
+    temp = params.rig.oil_temp_C if temp_C is None else float(temp_C)
+    v = params.valve
+    if config == "clutch":
+        f = params.friction
+        net = driveline.build(params, 0.0)
+        ci = 0  # the driveline's clutch
+        net.clutches[ci].mu_poly = tuple(c * f.mu_scale for c in f.mu_slip_poly)
+        # cold oil drags the open plates: viscous torque proportional to viscosity
+        drag = f.drag_20C * oil.dynamic_viscosity(temp) / oil.dynamic_viscosity(20.0)
+        net.spring("oil_drag", 0, 1, 0.0, drag)
+    else:
+        net = Network()
+        ci = -1
+    stem = net.body("stem", v.m_stem)
+    spring = net.spring("stem_spring", stem, GROUND, v.c_stem, v.d_stem)
+    net.brake("stem_friction", stem, Const(v.F_friction))
+    net.actuator(stem, spring, ci, u, A.pack(params, temp, config), pwm=pwm, pwm_freq=v.pwm_freq)
+    return RigNetwork(net, config, temp)
+
+
+def static_pressure(params: Params, u: Signal | float, *, pwm: bool = False, config: str = "clutch",
+                    temp_C: float | None = None, t_end: float = 3.0, window: float = 1.0,
+                    dt_out: float = 1e-3) -> float:
+    """Static clutch pressure (Pa) for input ``u``: the mean over the last ``window`` s of a run to ``t_end``.
+
+    Averaged rather than sampled, because a DC-driven valve hunts a little by stem
+    stick-slip and a PWM-driven one ripples.
+    """
+    rn = build(params, u, pwm=pwm, config=config, temp_C=temp_C)
+    tr = integrate(rn.network, t_end, dt_out=dt_out)
+    return float(np.mean(tr.x[tr.t >= t_end - window, rn.i_pressure]))

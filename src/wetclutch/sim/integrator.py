@@ -1,0 +1,311 @@
+"""The hybrid integrator: Dormand-Prince steps between events, exact mode switching at them.
+
+In every interval between events the modes are fixed and the ODE is smooth. Events
+(slip through zero, constraint torque beyond the static capacity, capacity through zero,
+gear power-flow reversal) are located on the dense output by the Illinois method; the
+state is taken on the violated side of the root and the modes are re-decided there
+(:func:`wetclutch.sim.modes.settle`). Time events (steps and ramp corners of the
+signals, PWM edges) end a step exactly; the modes are re-decided with the right limit.
+Steps are chosen by Hairer's PI step-size control.
+
+:func:`advance` is the entry point; its helpers each do one named thing and take the
+workspace whole.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..physics import actuator as act_
+from . import signals
+from .compiled import jit, jit_inline
+from .dopri import C, dense, error_norm, stage
+from .modes import forget, settle, stale
+from .rhs import copy, events, rhs
+from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_H, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T,
+                        IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE, IS_STEPS, IS_SWITCHES,
+                        LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED)
+
+
+@jit
+def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
+    """State and event functions at ``theta_t`` inside the last step (fixed modes)."""
+    dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
+    rhs(theta_t, False, ws.y_tmp, net, ext, ws, ws.dx, ws.aux_new, False)
+    events(ws.y_tmp, ws.aux_new, net, ws.clm, ws.grm, ws.g_new)
+
+
+@jit_inline
+def _emit(t, y, ws, net, ext, out_t, out_x, out_aux, out_mode):
+    """Write one output row (state, element torques, clutch modes) at time ``t``."""
+    i = ws.istate[IS_N_OUT]
+    if i >= out_t.shape[0]:
+        return
+    rhs(t, False, y, net, ext, ws, ws.dx, ws.aux_new, False, False)
+    out_t[i] = t
+    copy(out_x[i], y)
+    copy(out_aux[i], ws.aux_new)
+    for j in range(ws.clm.shape[0]):
+        out_mode[i, j] = ws.clm[j]
+    ws.istate[IS_N_OUT] = i + 1
+
+
+@jit
+def _log_modes(t, before, ws):
+    """Count and log the clutches' mode changes at ``t``; keep each clutch's first and last lock time."""
+    for j in range(ws.clm.shape[0]):
+        if ws.clm[j] != before[j] and before[j] != UNDECIDED:
+            n = ws.istate[IS_N_LOG]
+            if n < ws.evlog.shape[0]:
+                ws.evlog[n, 0] = t
+                ws.evlog[n, 1] = j
+                ws.evlog[n, 2] = ws.clm[j]
+            ws.istate[IS_N_LOG] = n + 1
+            ws.istate[IS_SWITCHES] += 1
+            if ws.clm[j] == LOCKED:
+                if ws.locks[j, LOCK_FIRST] < 0.0:
+                    ws.locks[j, LOCK_FIRST] = t
+                ws.locks[j, LOCK_LAST] = t
+
+
+@jit
+def _restart(ws, net, ext):
+    """Re-decide modes at the current time and refresh the first stage."""
+    t = ws.fstate[FS_T]
+    copy(ws.clm_before, ws.clm)
+    if not settle(t, net, ext, ws):
+        return False
+    _log_modes(t, ws.clm_before, ws)
+    if not rhs(t, False, ws.x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, ws.clm, ws.grm)):
+        forget(ws.fact)
+        return False
+    copy(ws.K[0], ws.dx)
+    events(ws.x, ws.aux, net, ws.clm, ws.grm, ws.g_old)
+    ws.istate[IS_SETTLE] = 0
+    return True
+
+
+@jit
+def _pwm_edge(t, ws, net, ext):
+    """At a PWM edge (or the start): switch the coil drive level and schedule the next edge.
+
+    The duty cycle is the actuator input, sampled at the start of each period.
+    Returns the new level (0 or 1) and proposes the first step after it: the one that
+    followed the last edge to that level (``fstate[FS_PWM_H + level]``; see :func:`advance`),
+    since the periods repeat nearly alike and the step before the edge knows nothing of the jump.
+    """
+    a = net.act
+    lvl = int(a[act_.PWM_EXT])
+    period = 1.0 / a[act_.PWM_FREQ]
+    if ext[lvl] > 0.5 and t < ws.fstate[FS_PWM_START] + period - 1e-12 * max(1.0, t):
+        ext[lvl] = 0.0  # falling edge inside the period
+        ws.fstate[FS_PWM_NEXT] = ws.fstate[FS_PWM_START] + period
+    else:
+        ws.fstate[FS_PWM_START] = t
+        duty = signals.value(int(a[act_.U_SIG]), t, False, net.sig, net.tab, ext)
+        if duty <= 0.0:
+            ext[lvl] = 0.0
+            ws.fstate[FS_PWM_NEXT] = t + period
+        elif duty >= 1.0:
+            ext[lvl] = 1.0
+            ws.fstate[FS_PWM_NEXT] = t + period
+        else:
+            ext[lvl] = 1.0
+            ws.fstate[FS_PWM_NEXT] = t + duty * period
+    level = 1 if ext[lvl] > 0.5 else 0
+    if ws.fstate[FS_PWM_H + level] > 0.0:
+        ws.fstate[FS_H] = ws.fstate[FS_PWM_H + level]
+    return level
+
+
+@jit_inline
+def _step_limit(t, t_stop, h_max, bp_i, pwm, ws, net):
+    """The next step: ``(h, at_lim, hit_bp, hit_pwm)``, cut to end on the next breakpoint, PWM edge or ``t_stop``."""
+    h = min(ws.fstate[FS_H], h_max)
+    t_lim = t_stop
+    hit_bp = False
+    if bp_i < net.bps.shape[0] and net.bps[bp_i] <= t_lim:
+        t_lim = net.bps[bp_i]
+        hit_bp = True
+    hit_pwm = False
+    if pwm and ws.fstate[FS_PWM_NEXT] <= t_lim:
+        hit_pwm = True
+        if ws.fstate[FS_PWM_NEXT] < t_lim:
+            t_lim = ws.fstate[FS_PWM_NEXT]
+            hit_bp = False
+    if t + h >= t_lim - 1e-12 * max(1.0, abs(t_lim)):
+        return t_lim - t, True, hit_bp, hit_pwm, t_lim
+    return h, False, hit_bp, hit_pwm, t_lim
+
+
+@jit_inline
+def _stages(t, h, t_new, y_old, ws, net, ext):
+    """The stages of one step into ``ws.K`` and the 5th-order solution into ``ws.y_new``; False if singular."""
+    for s in range(1, 6):
+        stage(y_old, ws.K, h, s, ws.y_tmp)
+        if not rhs(t + C[s] * h, True, ws.y_tmp, net, ext, ws, ws.K[s], ws.aux_new, False):
+            return False
+    stage(y_old, ws.K, h, 6, ws.y_new)
+    return rhs(t_new, True, ws.y_new, net, ext, ws, ws.K[6], ws.aux_new, False)
+
+
+@jit_inline
+def _locate_event(t, t_new, h, y_old, ws, net, ext):
+    """The earliest event in ``(t, t_new]`` and its event function (``inf``, -1: none).
+
+    Brackets ``[ta, tb]`` with ``g(ta) >= 0 > g(tb)``, refined by the Illinois method to
+    1e-13 s on the dense output.
+    """
+    t_ev = np.inf
+    e_ev = -1
+    for e in range(ws.g_old.shape[0]):
+        if ws.g_old[e] >= 0.0 and ws.g_new[e] < 0.0:
+            ta = t
+            ga = ws.g_old[e]
+            tb = t_new if t_ev == np.inf else t_ev
+            if tb < t_new:
+                _eval_at(tb, t, h, y_old, ws, net, ext)
+                gb = ws.g_new[e]
+                if gb >= 0.0:
+                    continue
+            else:
+                gb = ws.g_new[e]
+            side = 0
+            for _ in range(100):
+                if tb - ta <= 1e-13 * max(1.0, abs(tb)):
+                    break
+                tm = (ta * gb - tb * ga) / (gb - ga)
+                if not (ta < tm < tb):
+                    tm = 0.5 * (ta + tb)
+                _eval_at(tm, t, h, y_old, ws, net, ext)
+                gm = ws.g_new[e]
+                if gm >= 0.0:
+                    ta = tm
+                    ga = gm
+                    if side == -1:
+                        gb *= 0.5
+                    side = -1
+                else:
+                    tb = tm
+                    gb = gm
+                    if side == 1:
+                        ga *= 0.5
+                    side = 1
+            t_ev = tb
+            e_ev = e
+    return t_ev, e_ev
+
+
+@jit_inline
+def _emit_grid(t, t_seg, h, y_old, ws, net, ext, dt_out, t_out0, out_t, out_x, out_aux, out_mode):
+    """Output rows at the grid times in ``[t, t_seg)`` from the step's dense output."""
+    n_grid = out_t.shape[0]
+    j = ws.istate[IS_N_OUT]
+    while j < n_grid and t_out0 + j * dt_out < t_seg:
+        tg = t_out0 + j * dt_out
+        dense(y_old, ws.K, h, (tg - t) / h, ws.y_tmp, ws.bw)
+        _emit(tg, ws.y_tmp, ws, net, ext, out_t, out_x, out_aux, out_mode)
+        j = ws.istate[IS_N_OUT]
+
+
+@jit_inline
+def _next_step(h, log_err, at_lim, ws):
+    """PI step-size control after an accepted step (Hairer's DOPRI5: steadier near the stability limit),
+    in logarithms: one log and one exp per step instead of two powers. Returns the step's factor."""
+    fac = max(0.1, min(5.0, np.exp(0.17 * log_err - 0.04 * ws.fstate[FS_LOG_ERR]) / 0.9))
+    ws.fstate[FS_LOG_ERR] = max(log_err, np.log(1e-4))
+    ws.fstate[FS_H] = h / fac if not at_lim else max(ws.fstate[FS_H], h)
+    return fac
+
+
+@jit
+def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_x, out_aux, out_mode):
+    """Integrate from the workspace's time to ``t_stop``; write outputs on the grid.
+
+    Output rows are written at ``t_out0 + j * dt_out`` for every grid time in
+    ``[t, t_stop)``, and at ``t_stop`` itself when it lies on the grid and is the
+    last grid time. Calling ``advance`` again continues where it stopped (after a
+    caller has changed ``ext``, set ``ws.istate[IS_SETTLE] = 1`` to re-decide modes).
+
+    Returns a status code (``OK``, ``ERR_SINGULAR``, ``ERR_ZENO``).
+    """
+    n_grid = out_t.shape[0]
+    y_old = ws.y_old
+    t = ws.fstate[FS_T]
+    stalls = 0
+    bp_i = np.searchsorted(net.bps, t, side="right")
+    pwm = net.act.shape[0] > 0 and net.act[act_.MODE] == act_.PWM
+    after_edge = -1  # level of the PWM edge the next accepted step follows (-1: none)
+    if pwm and ws.fstate[FS_PWM_NEXT] == -np.inf:
+        after_edge = _pwm_edge(t, ws, net, ext)
+        ws.istate[IS_SETTLE] = 1
+    if ws.istate[IS_SETTLE] != 0:
+        if not _restart(ws, net, ext):
+            return ERR_SINGULAR
+    while t < t_stop:
+        h, at_lim, hit_bp, hit_pwm, t_lim = _step_limit(t, t_stop, h_max, bp_i, pwm, ws, net)
+        if h <= 0.0:
+            # a breakpoint or PWM edge at the current time
+            if hit_bp or hit_pwm:
+                if hit_bp:
+                    bp_i += 1
+                if hit_pwm:
+                    after_edge = _pwm_edge(t, ws, net, ext)
+                if not _restart(ws, net, ext):
+                    return ERR_SINGULAR
+                continue
+            break
+        copy(y_old, ws.x)
+        t_new = t_lim if at_lim else t + h
+        if not _stages(t, h, t_new, y_old, ws, net, ext):
+            return ERR_SINGULAR
+        err = error_norm(y_old, ws.y_new, ws.K, h, rtol, atol, ws.y_tmp)  # y_tmp (stage 5) is free again
+        log_err = np.log(err + 1e-30)
+        if err > 1.0:
+            ws.fstate[FS_H] = h / min(5.0, np.exp(0.17 * log_err) / 0.9)
+            ws.istate[IS_REJECTED] += 1
+            continue
+        ws.istate[IS_STEPS] += 1
+        events(ws.y_new, ws.aux_new, net, ws.clm, ws.grm, ws.g_new)
+        t_ev, e_ev = _locate_event(t, t_new, h, y_old, ws, net, ext)
+        _emit_grid(t, t_new if t_ev == np.inf else t_ev, h, y_old, ws, net, ext, dt_out, t_out0,
+                   out_t, out_x, out_aux, out_mode)
+        if t_ev != np.inf:
+            dense(y_old, ws.K, h, (t_ev - t) / h, ws.x, ws.bw)
+            if t_ev - t <= 1e-12 * max(1.0, abs(t)):
+                stalls += 1
+                if stalls > 100:
+                    return ERR_ZENO
+            else:
+                stalls = 0
+            t = t_ev
+            ws.fstate[FS_T] = t
+            ws.istate[IS_EVENTS] += 1
+            ws.istate[IS_LAST_EVENT] = e_ev
+            if not _restart(ws, net, ext):
+                return ERR_SINGULAR
+            continue
+        stalls = 0
+        copy(ws.x, ws.y_new)
+        t = t_new
+        ws.fstate[FS_T] = t
+        fac = _next_step(h, log_err, at_lim, ws)
+        if after_edge >= 0:
+            ws.fstate[FS_PWM_H + after_edge] = h / fac  # what this first step after the edge should have been
+            after_edge = -1
+        if at_lim and (hit_bp or hit_pwm):
+            if hit_bp:
+                bp_i += 1
+            if hit_pwm:
+                after_edge = _pwm_edge(t, ws, net, ext)
+            if not _restart(ws, net, ext):
+                return ERR_SINGULAR
+        else:
+            copy(ws.K[0], ws.K[6])
+            copy(ws.g_old, ws.g_new)
+            copy(ws.aux, ws.aux_new)
+    # the last grid point, when it falls on t_stop (earlier ones start the next call)
+    j = ws.istate[IS_N_OUT]
+    if j == n_grid - 1 and abs(t_out0 + j * dt_out - t_stop) <= 1e-9 * max(1.0, dt_out):
+        _emit(t_stop, ws.x, ws, net, ext, out_t, out_x, out_aux, out_mode)
+    return OK

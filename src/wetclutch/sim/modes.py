@@ -1,0 +1,198 @@
+"""Mode decisions at events and breakpoints: which clutches lock, slide or are free, which gears stick.
+
+At an event the modes are re-decided from the state (:func:`settle`): a clutch at zero
+slip is tried locked, the locked clutch most beyond its static capacity is released in
+the direction of its constraint torque, gears are set by the direction of power flow
+and stick at standstill while their friction bounds hold. Newly locked pairs are
+projected onto their inertia-weighted common speed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .compiled import jit, jit_inline
+from .rhs import capacity, hold_margins, poly, rhs, slip
+from .workspace import FREE, LOCKED, NO_MODE, STUCK, aux_offsets
+
+
+@jit_inline
+def stale(fact, clm, grm):
+    """Whether the constraint factors (``A``, ``G``) were made for other modes than ``clm``, ``grm``.
+
+    The constraint matrix depends on the modes only, so a restart that keeps them (an input
+    sample of a closed loop, a breakpoint) reuses its factors. ``fact`` records the modes of
+    the factors and is updated here: the caller refactors when this returns True.
+    """
+    nc = clm.shape[0]
+    is_stale = False
+    for j in range(nc):
+        if fact[j] != clm[j]:
+            is_stale = True
+            fact[j] = clm[j]
+    for k in range(grm.shape[0]):
+        if fact[nc + k] != grm[k]:
+            is_stale = True
+            fact[nc + k] = grm[k]
+    return is_stale
+
+
+@jit_inline
+def forget(fact):
+    # factors that failed are no factors
+    for i in range(fact.shape[0]):
+        fact[i] = NO_MODE
+
+
+@jit_inline
+def _first_guess(t, x, net, ext, clm, grm):
+    """Modes from the state alone: clutches by capacity and slip, gears stuck at standstill."""
+    nc = net.cl_a.shape[0]
+    ng = net.gr_in.shape[0]
+    t_right = t + 1e-9 * max(1.0, abs(t))
+    for j in range(nc):
+        a = net.cl_a[j]
+        b = net.cl_b[j]
+        cap = max(capacity(j, t, False, x, net, ext), capacity(j, t_right, False, x, net, ext))
+        s = slip(x, net, j)
+        scale = max(1.0, abs(x[a]), abs(x[b]) if b >= 0 else 0.0)
+        if cap <= 0.0:
+            clm[j] = FREE
+        elif abs(s) <= 1e-8 * scale:
+            clm[j] = LOCKED
+        else:
+            clm[j] = 1 if s > 0.0 else -1
+    # "at standstill" relative to the speeds in the network (rad/s scale of the run)
+    w_scale = 1.0
+    for k in range(net.J.shape[0]):
+        w_scale = max(w_scale, abs(x[k]))
+    for k in range(ng):
+        i_in = net.gr_in[k]
+        o = net.gr_out[k]
+        if abs(x[o]) <= 1e-8 * w_scale and abs(x[i_in]) <= 1e-8 * w_scale:
+            grm[k] = STUCK
+        elif abs(grm[k]) == STUCK:
+            grm[k] = 1
+
+
+@jit_inline
+def _project(x, net, clm, grm):
+    """Stuck gears to standstill, locked pairs onto their inertia-weighted common speed."""
+    for k in range(net.gr_in.shape[0]):
+        if abs(grm[k]) == STUCK:
+            x[net.gr_in[k]] = 0.0
+            x[net.gr_out[k]] = 0.0
+    for j in range(net.cl_a.shape[0]):
+        if clm[j] == LOCKED:
+            a = net.cl_a[j]
+            b = net.cl_b[j]
+            if b < 0:
+                x[a] = 0.0
+            else:
+                ja = net.J[a]
+                jb = net.J[b]
+                if ja + jb > 0.0:
+                    w = (ja * x[a] + jb * x[b]) / (ja + jb)
+                else:
+                    w = 0.5 * (x[a] + x[b])
+                x[a] = w
+                x[b] = w
+
+
+@jit_inline
+def _gear_modes(x, dx, aux, net, grm, released):
+    """Release a stuck gear whose bounds fail, or turn a gear whose power flows the other way; True if one changed."""
+    nc = net.cl_a.shape[0]
+    ng = net.gr_in.shape[0]
+    _, _, o_gear_out, _, o_gear_in = aux_offsets(nc, ng, net.sp_k.shape[0])
+    changed = False
+    for k in range(ng):
+        o = net.gr_out[k]
+        lam = aux[o_gear_out + k]
+        if abs(grm[k]) == STUCK:
+            q = -aux[o_gear_in + k] / net.gr_ratio[k]
+            ref = lam if lam != 0.0 else q
+            grm[k] = -STUCK if ref < 0.0 else STUCK
+            m_in, m_out = hold_margins(aux, net, grm, k)
+            if m_in < 0.0:
+                grm[k] = -1  # the output side overcomes the input: power flows back
+            elif m_out < 0.0:
+                grm[k] = 1  # the input side drives the output
+            else:
+                continue
+            released[nc + k] = 1
+            return True
+        p = lam * (x[o] if x[o] != 0.0 else dx[o])
+        if grm[k] * p < 0.0 and not (released[nc + k] != 0 and x[o] == 0.0):
+            grm[k] = -grm[k]
+            changed = True
+    return changed
+
+
+@jit_inline
+def _release_worst(aux, net, clm, released):
+    """Release the locked clutch most beyond its static capacity; True if one was. The test is the
+    event function itself, so a clutch kept locked starts with g >= 0."""
+    nc = net.cl_a.shape[0]
+    worst = -1
+    worst_excess = 0.0
+    for j in range(nc):
+        if clm[j] == LOCKED:
+            lim = net.cl_peak[j] * aux[nc + j] * poly(net.cl_poly, j, 0.0)
+            if lim - abs(aux[j]) < 0.0:
+                excess = abs(aux[j]) / lim if lim > 0.0 else np.inf
+                if excess > worst_excess:
+                    worst_excess = excess
+                    worst = j
+    if worst < 0:
+        return False
+    clm[worst] = 1 if aux[worst] > 0.0 else -1
+    released[worst] = 1
+    return True
+
+
+@jit_inline
+def _lock_backsliding(x, dx, net, clm, released):
+    """A clutch sliding from zero slip must accelerate in its own direction, else it locks; True if one did."""
+    changed = False
+    for j in range(net.cl_a.shape[0]):
+        m = clm[j]
+        if (m == 1 or m == -1) and released[j] == 0:
+            a = net.cl_a[j]
+            b = net.cl_b[j]
+            if slip(x, net, j) * m <= 0.0:
+                rel = dx[a] - (dx[b] if b >= 0 else 0.0)
+                if rel * m < 0.0:
+                    clm[j] = LOCKED
+                    changed = True
+    return changed
+
+
+@jit
+def settle(t, net, ext, ws):
+    """Decide consistent modes at time ``t`` for the workspace's state; project newly locked speeds.
+
+    Uses ``ws.x``, ``ws.clm``, ``ws.grm`` (updated), ``ws.dx``, ``ws.aux`` and the constraint
+    buffers. Returns False if the system is singular.
+    """
+    x = ws.x
+    clm = ws.clm
+    grm = ws.grm
+    released = ws.released
+    nc = net.cl_a.shape[0]
+    ng = net.gr_in.shape[0]
+    _first_guess(t, x, net, ext, clm, grm)
+    # a clutch or gear released in this settle must not be re-locked (no cycling)
+    released[:] = 0
+    for _ in range(4 * (nc + ng) + 4):
+        _project(x, net, clm, grm)
+        if not rhs(t, False, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm)):
+            forget(ws.fact)
+            return False
+        if _gear_modes(x, ws.dx, ws.aux, net, grm, released):
+            continue
+        if _release_worst(ws.aux, net, clm, released):
+            continue
+        if not _lock_backsliding(x, ws.dx, net, clm, released):
+            break
+    return True

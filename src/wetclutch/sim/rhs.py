@@ -1,0 +1,318 @@
+"""The right-hand side of a network for fixed modes, and the event functions that end those modes.
+
+Sign conventions (as in Modelica ``Mechanics.Rotational``): every element joins a flange
+``a`` to a flange ``b`` (body indices; ``-1`` is the ground).
+
+* clutch / brake: slip ``w_a - w_b``; the element's torque ``T`` acts on ``b`` and ``-T``
+  on ``a``. Sliding: ``T = cap * mu(|slip|) * sign(slip)``. Locked: ``T`` is a constraint
+  torque, bounded by ``peak * cap * mu(0)``.
+* gear (``in`` = a, ``out`` = b): ``w_out = ratio * w_in``; its torque ``lam`` acts on
+  ``out``, and ``-ratio * c * lam`` on ``in`` with ``c = 1/eta`` when power flows in -> out
+  (``lam * w_out > 0``) and ``c = eta`` when it flows back, so losses never create power.
+* spring-damper: deflection ``phi' = w_a - w_b``; torque ``k phi + d (w_a - w_b)`` on
+  ``b``, its negative on ``a``.
+
+Locked clutches and gears are acceleration constraints, solved together with the bodies
+in one small linear (KKT) system ``[M B; G 0] [a; lam] = [f; 0]``. Its matrix depends on
+the modes only, so it is factored when they change and the columns of its inverse that
+multiply the body torques are kept: every other evaluation is a small matrix-vector
+product.
+"""
+
+from __future__ import annotations
+
+from ..physics import actuator as act_
+from . import signals
+from .compiled import jit_inline
+from .linalg import lu_factor, lu_solve
+from .workspace import E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, LOCKED, STUCK, aux_offsets
+
+
+@jit_inline
+def copy(dst, src):
+    # an explicit loop: slice assignment may allocate a temporary, which needs NRT
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@jit_inline
+def poly(c, row, s):
+    """Row ``row`` of the coefficient table ``c`` (highest power first) at ``s`` (Horner)."""
+    v = 0.0
+    for j in range(c.shape[1]):
+        v = v * s + c[row, j]
+    return v
+
+
+@jit_inline
+def capacity(j, t, left, x, net, ext):
+    """Torque capacity factor of clutch ``j``: its signal, or the actuator's normal force."""
+    if net.act.shape[0] > 0 and j == int(net.act[act_.CLUTCH]):
+        f_n = act_.normal_force(x[int(net.act[act_.STATE]) + act_.PRESSURE], net.act)
+        return f_n * act_.friction_factor(f_n, net.act)
+    return signals.value(net.cl_sig[j], t, left, net.sig, net.tab, ext)
+
+
+@jit_inline
+def slip(x, net, j):
+    b = net.cl_b[j]
+    return x[net.cl_a[j]] - (x[b] if b >= 0 else 0.0)
+
+
+@jit_inline
+def spring_torque(net, j, x):
+    """Torque of spring-damper ``j`` on its flange ``b`` and its deflection rate ``w_a - w_b``."""
+    nb = net.J.shape[0]
+    a = net.sp_a[j]
+    b = net.sp_b[j]
+    dw = x[a] - (x[b] if b >= 0 else 0.0)
+    return net.sp_k[j] * x[nb + j] + net.sp_d[j] * dw, dw
+
+
+@jit_inline
+def _applied_torques(t, left, x, net, ext, dx, aux, z):
+    """Drag, source and spring torques into ``z``, spring rates into ``dx``; their powers (drag, source, damper)."""
+    nb = net.J.shape[0]
+    nc = net.cl_a.shape[0]
+    ng = net.gr_in.shape[0]
+    ns = net.sp_k.shape[0]
+    o_spring = aux_offsets(nc, ng, ns)[3]
+    p_drag = 0.0
+    for k in range(nb):
+        tau = net.drag[k] * x[k] * abs(x[k])
+        z[k] = -tau
+        p_drag += tau * x[k]
+    p_src = 0.0
+    for j in range(net.src_body.shape[0]):
+        tau = signals.value(net.src_sig[j], t, left, net.sig, net.tab, ext)
+        bdy = net.src_body[j]
+        z[bdy] += tau
+        p_src += tau * x[bdy]
+    p_damp = 0.0
+    for j in range(ns):
+        a = net.sp_a[j]
+        b = net.sp_b[j]
+        tau, dw = spring_torque(net, j, x)
+        z[a] -= tau
+        if b >= 0:
+            z[b] += tau
+        dx[nb + j] = dw
+        p_damp += net.sp_d[j] * dw * dw
+        aux[o_spring + j] = tau
+    return p_drag, p_src, p_damp
+
+
+@jit_inline
+def _actuator(t, left, x, net, ext, dx, z, full, p_src):
+    """The actuator's states' rates into ``dx`` and its force on the valve stem into ``z``; ``p_src`` plus its power."""
+    if net.act.shape[0] == 0:
+        return p_src
+    u = signals.value(int(net.act[act_.U_SIG]), t, left, net.sig, net.tab, ext)
+    f_stem, _ = act_.evaluate(x, net.act, u, ext, dx, full)
+    stem = int(net.act[act_.STEM_BODY])
+    z[stem] += f_stem
+    p_src += f_stem * x[stem]
+    return p_src
+
+
+@jit_inline
+def _clutch_torques(t, left, x, net, ext, clm, dx, aux, z):
+    """Sliding clutches' torques into ``z`` and ``aux``, capacities into ``aux``, their dissipation rates into
+    ``dx``; the number of locked clutches."""
+    nb = net.J.shape[0]
+    ns = net.sp_k.shape[0]
+    nc = net.cl_a.shape[0]
+    e0 = nb + ns
+    nlock = 0
+    for j in range(nc):
+        a = net.cl_a[j]
+        b = net.cl_b[j]
+        s = x[a] - (x[b] if b >= 0 else 0.0)
+        cap = capacity(j, t, left, x, net, ext)
+        aux[nc + j] = cap
+        m = clm[j]
+        if m == LOCKED:
+            nlock += 1
+            dx[e0 + j] = 0.0
+        elif m == FREE or cap <= 0.0:
+            aux[j] = 0.0
+            dx[e0 + j] = 0.0
+        else:
+            # the friction polynomial holds over the measured slip range; never negative
+            tau = m * cap * max(poly(net.cl_poly, j, abs(s)), 0.0)
+            z[a] -= tau
+            if b >= 0:
+                z[b] += tau
+            aux[j] = tau
+            dx[e0 + j] = tau * s
+    return nlock
+
+
+@jit_inline
+def _factor_constraints(net, clm, grm, A, piv, sol, G, n):
+    """Build and LU-factor the constraint matrix of the current modes; keep the inverse's body-torque
+    columns in ``G``. False if singular."""
+    nb = net.J.shape[0]
+    nc = net.cl_a.shape[0]
+    ng = net.gr_in.shape[0]
+    for r in range(n):
+        for c in range(n):
+            A[r, c] = 0.0
+    for k in range(nb):
+        A[k, k] = net.J[k]
+    col = nb
+    for j in range(nc):
+        if clm[j] == LOCKED:
+            a = net.cl_a[j]
+            b = net.cl_b[j]
+            A[a, col] += 1.0
+            A[col, a] = 1.0
+            if b >= 0:
+                A[b, col] -= 1.0
+                A[col, b] = -1.0
+            col += 1
+    for g in range(ng):
+        i_in = net.gr_in[g]
+        i_out = net.gr_out[g]
+        if abs(grm[g]) == STUCK:
+            # both flanges held; the two torques are free within the friction bounds
+            A[i_out, col] -= 1.0
+            A[col, i_out] = 1.0
+            A[i_in, col + 1] -= 1.0
+            A[col + 1, i_in] = 1.0
+            col += 2
+            continue
+        c = 1.0 / net.gr_eta[g] if grm[g] > 0 else net.gr_eta[g]
+        A[i_out, col] -= 1.0
+        A[i_in, col] += net.gr_ratio[g] * c
+        A[col, i_out] = 1.0
+        A[col, i_in] = -net.gr_ratio[g]
+        col += 1
+    if not lu_factor(A, piv, n):
+        return False
+    for c in range(nb):
+        for r in range(n):
+            sol[r] = 0.0
+        sol[c] = 1.0
+        lu_solve(A, piv, sol, n)
+        for r in range(n):
+            G[r, c] = sol[r]
+    return True
+
+
+@jit_inline
+def _solve_constraints(G, z, dx, nb, n, full):
+    """Accelerations into ``dx`` (skipped unless ``full``) and constraint torques into ``z[nb:n]``
+    (the right-hand side is zero there)."""
+    for r in range(0 if full else nb, n):
+        acc = 0.0
+        for c in range(nb):
+            acc += G[r, c] * z[c]
+        if r < nb:
+            dx[r] = acc
+        else:
+            z[r] = acc
+
+
+@jit_inline
+def _constraint_torques(x, net, clm, grm, z, aux):
+    """Locked clutches' and gears' torques from the solution into ``aux``; the gears' loss power."""
+    nb = net.J.shape[0]
+    nc = net.cl_a.shape[0]
+    ng = net.gr_in.shape[0]
+    ns = net.sp_k.shape[0]
+    _, _, o_gear_out, _, o_gear_in = aux_offsets(nc, ng, ns)
+    col = nb
+    for j in range(nc):
+        if clm[j] == LOCKED:
+            aux[j] = z[col]
+            col += 1
+    p_gear = 0.0
+    for g in range(ng):
+        lam = z[col]
+        aux[o_gear_out + g] = lam
+        if abs(grm[g]) == STUCK:
+            aux[o_gear_in + g] = z[col + 1]
+            col += 2
+            continue
+        c = 1.0 / net.gr_eta[g] if grm[g] > 0 else net.gr_eta[g]
+        p_gear += lam * x[net.gr_out[g]] * (c - 1.0)
+        aux[o_gear_in + g] = -net.gr_ratio[g] * c * lam
+        col += 1
+    return p_gear
+
+
+@jit_inline
+def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
+    """Derivatives ``dx`` and element torques ``aux`` (layout: :func:`~wetclutch.sim.workspace.aux_offsets`)
+    of state ``x`` for the workspace's modes; False if the constraint system is singular.
+
+    The constraint factors are remade when ``refactor`` is set. With ``full`` False only
+    ``aux`` is needed (an output row): the accelerations and the actuator's pressure
+    derivative are then skipped.
+    """
+    nb = net.J.shape[0]
+    ns = net.sp_k.shape[0]
+    nc = net.cl_a.shape[0]
+    ng = net.gr_in.shape[0]
+    e0 = nb + ns
+    clm = ws.clm
+    grm = ws.grm
+    z = ws.z
+    p_drag, p_src, p_damp = _applied_torques(t, left, x, net, ext, dx, aux, z)
+    p_src = _actuator(t, left, x, net, ext, dx, z, full, p_src)
+    nlock = _clutch_torques(t, left, x, net, ext, clm, dx, aux, z)
+    n = nb + nlock + ng
+    for g in range(ng):
+        if abs(grm[g]) == STUCK:
+            n += 1
+    if refactor:
+        if not _factor_constraints(net, clm, grm, ws.A, ws.piv, ws.sol, ws.G, n):
+            return False
+    _solve_constraints(ws.G, z, dx, nb, n, full)
+    p_gear = _constraint_torques(x, net, clm, grm, z, aux)
+    dx[e0 + nc + E_DRAG] = p_drag
+    dx[e0 + nc + E_DAMPER] = p_damp
+    dx[e0 + nc + E_GEAR] = p_gear
+    dx[e0 + nc + E_SOURCE] = p_src
+    return True
+
+
+@jit_inline
+def hold_margins(aux, net, grm, k):
+    """A stuck gear holds while the input torque, seen at the output (``q``), has the
+    sign ``s`` of the held torque and ``eta |lam| <= |q| <= |lam| / eta``."""
+    nc = net.cl_a.shape[0]
+    ng = net.gr_in.shape[0]
+    ns = net.sp_k.shape[0]
+    _, _, o_gear_out, _, o_gear_in = aux_offsets(nc, ng, ns)
+    lam = aux[o_gear_out + k]
+    q = -aux[o_gear_in + k] / net.gr_ratio[k]
+    sg = 1.0 if grm[k] > 0 else -1.0
+    return sg * (q - net.gr_eta[k] * lam), sg * (lam / net.gr_eta[k] - q)
+
+
+@jit_inline
+def events(x, aux, net, clm, grm, g):
+    """Event functions into ``g``: each is >= 0 while the current modes are valid."""
+    nc = net.cl_a.shape[0]
+    for j in range(nc):
+        cap = aux[nc + j]
+        m = clm[j]
+        if m == LOCKED:
+            g[2 * j] = net.cl_peak[j] * cap * poly(net.cl_poly, j, 0.0) - abs(aux[j])
+            g[2 * j + 1] = cap
+        elif m == FREE:
+            g[2 * j] = -cap
+            g[2 * j + 1] = 1.0
+        else:
+            g[2 * j] = m * slip(x, net, j)
+            g[2 * j + 1] = cap
+    ng = net.gr_in.shape[0]
+    for k in range(ng):
+        lam = aux[2 * nc + k]
+        if abs(grm[k]) == STUCK:
+            g[2 * nc + 2 * k], g[2 * nc + 2 * k + 1] = hold_margins(aux, net, grm, k)
+        else:
+            g[2 * nc + 2 * k] = grm[k] * lam * x[net.gr_out[k]]
+            g[2 * nc + 2 * k + 1] = 1.0

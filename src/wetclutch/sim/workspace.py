@@ -1,0 +1,141 @@
+"""The integrator's records: modes, status codes, the workspace and the layouts of its arrays.
+
+This module owns every flat record the integrator keeps besides the network itself: it
+names the slots of the running state (``fstate``, ``istate``), the blocks of the element
+torques (``aux``) and of the state vector's energy accumulators, and
+:func:`new_workspace` alone allocates and fills a workspace.
+
+State vector ``x``: body speeds (nb), spring deflections (ns), the energy accumulators
+(the dissipation of each clutch (nc), then :data:`N_ENERGY_EXTRA` more: drag, damper and
+gear losses and the work of the sources), then the actuator's states, if any.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .compiled import jit_inline
+
+# clutch modes; +1 / -1 are sliding forward / backward
+FREE, LOCKED, UNDECIDED = 0, 2, 99
+#: in ``Workspace.fact``: no constraint factors made yet
+NO_MODE = -99
+#: a gear held at standstill (+3 / -3: sign of the held output torque); +1 / -1: power flowing forward / back
+STUCK = 3
+
+# status codes returned by the core
+OK, ERR_SINGULAR, ERR_ZENO = 0, 1, 2
+
+# energy accumulators after the clutches' dissipation
+E_DRAG, E_DAMPER, E_GEAR, E_SOURCE = range(4)
+N_ENERGY_EXTRA = 4
+
+# fstate: the float part of the running state
+FS_T = 0  # current time
+FS_H = 1  # proposed next step
+FS_LOG_ERR = 2  # log of the previous accepted step's error (PI step control)
+FS_PWM_NEXT = 3  # time of the next PWM edge (-inf: not started)
+FS_PWM_START = 4  # start of the current PWM period
+FS_PWM_H = 5  # + level (0 or 1): the first step after the last edge to that level (0: none yet)
+N_FSTATE = 7
+
+# istate: the integer part
+IS_SETTLE = 0  # modes must be re-decided before the next step
+IS_N_OUT = 1  # output rows written
+IS_STEPS = 2  # accepted steps
+IS_REJECTED = 3  # rejected steps
+IS_EVENTS = 4  # located events
+IS_SWITCHES = 5  # clutch mode changes
+IS_N_LOG = 6  # mode changes logged (may exceed the log's length)
+IS_LAST_EVENT = 7  # event function of the last event
+N_ISTATE = 8
+
+EVENT_LOG = 4096  # rows of the mode-change log (time, clutch, new mode); later changes are counted, not logged
+LOCK_FIRST, LOCK_LAST = 0, 1  # columns of Workspace.locks: first and last time each clutch locked (-1: never)
+
+
+@jit_inline
+def aux_offsets(nc, ng, ns):
+    """Start of each block of the element torques ``aux``: clutch torques (nc), capacities (nc),
+    gear output torques (ng), spring torques (ns), gear input torques (ng)."""
+    return 0, nc, 2 * nc, 2 * nc + ng, 2 * nc + ng + ns
+
+
+def aux_size(nc: int, ng: int, ns: int) -> int:
+    return 2 * nc + 2 * ng + ns
+
+
+class Workspace(NamedTuple):
+    """Preallocated buffers and the integrator's running state for one network."""
+
+    x: np.ndarray  # current state
+    clm: np.ndarray  # clutch modes
+    grm: np.ndarray  # gear modes (+1 forward, -1 backward, +-STUCK held at standstill)
+    fstate: np.ndarray  # (N_FSTATE,) see FS_*
+    istate: np.ndarray  # (N_ISTATE,) see IS_*
+    K: np.ndarray  # (7, nx) stages
+    dx: np.ndarray
+    aux: np.ndarray
+    aux_new: np.ndarray
+    g_old: np.ndarray
+    g_new: np.ndarray
+    A: np.ndarray  # LU factors of the constraint matrix for the current modes
+    z: np.ndarray
+    piv: np.ndarray
+    sol: np.ndarray  # (nmat,) scratch: one column of the inverse constraint matrix
+    G: np.ndarray  # (nmat, nb) torque-to-solution columns of the inverse constraint matrix
+    y_new: np.ndarray
+    y_tmp: np.ndarray
+    bw: np.ndarray  # (7,) dense-output weights
+    y_old: np.ndarray  # state at the start of the current step
+    clm_before: np.ndarray  # clutch modes before a restart
+    released: np.ndarray  # (nc + ng) scratch for the mode decision
+    fact: np.ndarray  # (nc + ng) clutch and gear modes the factors in A, G were made for
+    evlog: np.ndarray  # (EVENT_LOG, 3): t, clutch index, new mode
+    locks: np.ndarray  # (nc, 2): LOCK_FIRST, LOCK_LAST times
+
+
+def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Workspace:
+    """Fresh integrator state for the compiled network ``net`` starting at ``(t0, x0)``; modes are
+    decided on the first call."""
+    nx = x0.size
+    nb = net.J.size
+    nc = net.cl_a.size
+    ng = net.gr_in.size
+    ns = net.sp_k.size
+    nmat = nb + nc + 2 * ng
+    naux = aux_size(nc, ng, ns)
+    fstate = np.zeros(N_FSTATE)
+    fstate[FS_T], fstate[FS_H], fstate[FS_LOG_ERR] = t0, h0, np.log(1e-4)
+    fstate[FS_PWM_NEXT], fstate[FS_PWM_START] = -np.inf, t0
+    istate = np.zeros(N_ISTATE, dtype=np.int64)
+    istate[IS_SETTLE], istate[IS_LAST_EVENT] = 1, -1
+    return Workspace(
+        x=x0.astype(np.float64).copy(),
+        clm=np.full(nc, UNDECIDED, dtype=np.int64),
+        grm=np.ones(ng, dtype=np.int64),
+        fstate=fstate,
+        istate=istate,
+        K=np.zeros((7, nx)),
+        dx=np.zeros(nx),
+        aux=np.zeros(max(naux, 1)),
+        aux_new=np.zeros(max(naux, 1)),
+        g_old=np.zeros(max(2 * nc + 2 * ng, 1)),
+        g_new=np.zeros(max(2 * nc + 2 * ng, 1)),
+        A=np.zeros((max(nmat, 1), max(nmat, 1))),
+        z=np.zeros(max(nmat, 1)),
+        piv=np.zeros(max(nmat, 1), dtype=np.int64),
+        sol=np.zeros(max(nmat, 1)),
+        G=np.zeros((max(nmat, 1), max(nb, 1))),
+        y_new=np.zeros(nx),
+        y_tmp=np.zeros(nx),
+        bw=np.zeros(7),
+        y_old=np.zeros(nx),
+        clm_before=np.zeros(nc, dtype=np.int64),
+        released=np.zeros(nc + ng, dtype=np.int64),
+        fact=np.full(nc + ng, NO_MODE, dtype=np.int64),
+        evlog=np.zeros((EVENT_LOG, 3)),
+        locks=np.full((max(nc, 1), 2), -1.0),
+    )
