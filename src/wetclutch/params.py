@@ -33,7 +33,7 @@ Default values and why (see also ``docs/model.md``, "Default parameters"):
   0.45 N m at 150 rad/s on the primary.
 
 Valve and hydraulics, calibrated together against the study's figures (see
-:mod:`wetclutch.calibration` and ``docs/model.md``):
+:mod:`wetclutch.rig.calibration` and ``docs/model.md``):
 
 * ``I_hyst`` 0.045 A: the magnet's hysteresis (a play on the coil current), about 3 % of
   the 1.4 A the valve test reaches; the up and down staircases of the valve test then

@@ -51,7 +51,7 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
     Parameters
     ----------
     recordings
-        Checked recordings (:func:`wetclutch.channels.load`).
+        Checked recordings (:func:`wetclutch.ident.recordings.load`).
     prior
         Parameters not identified here (piston area, efficiency, friction knee,
         inertias ...) and the base of the identified parameter set; defaults if None.

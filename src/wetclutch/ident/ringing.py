@@ -32,7 +32,7 @@ def resonance(rec: Recording, slip_tol: float = 2.0, min_window: float = 0.8) ->
     Synchronisation is the start of the final stretch of ``|slip| < slip_tol``;
     the fit starts 0.1 s later (the lock-up transient) and needs at least
     ``min_window`` seconds. The start values come from the zero-crossing
-    frequency (:func:`wetclutch.driveline.ring_frequency`).
+    frequency (:func:`wetclutch.plant.driveline.ring_frequency`).
     """
     if rec.config != "clutch":
         return None

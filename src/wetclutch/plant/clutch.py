@@ -5,7 +5,7 @@ Two configurations, as in the study:
 ``clutch``
     The valve drives the clutch piston; the clutch capacity comes from the
     pressure (``F_n``) and the friction law; the driveline of
-    :mod:`wetclutch.driveline` runs from 150 rad/s with the secondary at rest.
+    :mod:`wetclutch.plant.driveline` runs from 150 rad/s with the secondary at rest.
 ``valve-only``
     The study's valve test: the clutch is replaced by a downstream restriction
     passing :data:`wetclutch.physics.actuator.VALVE_TEST_FLOW` at the supply pressure (continuous flow instead of a
@@ -16,7 +16,7 @@ Two configurations, as in the study:
 
 The oil temperature is a parameter of the experiment (``rig.oil_temp_C``); the
 oil's viscosity (supply line loss, leakage, open-clutch drag), density and bulk
-modulus follow from :mod:`wetclutch.oil`.
+modulus follow from :mod:`wetclutch.physics.oil`.
 """
 
 from __future__ import annotations

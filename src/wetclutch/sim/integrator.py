@@ -22,7 +22,7 @@ from .compiled import jit, jit_inline
 from .dopri import C, dense, error_norm, stage
 from .modes import forget, settle, stale
 from .rhs import copy, events, rhs
-from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_H, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T,
+from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T,
                         IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE, IS_STEPS, IS_SWITCHES,
                         LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED)
 
@@ -63,9 +63,10 @@ def _log_modes(t, before, ws):
             ws.istate[IS_N_LOG] = n + 1
             ws.istate[IS_SWITCHES] += 1
             if ws.clm[j] == LOCKED:
-                if ws.locks[j, LOCK_FIRST] < 0.0:
-                    ws.locks[j, LOCK_FIRST] = t
-                ws.locks[j, LOCK_LAST] = t
+                # kept apart from the log, which may be full
+                if ws.fstate[FS_LOCKS + 2 * j + LOCK_FIRST] < 0.0:
+                    ws.fstate[FS_LOCKS + 2 * j + LOCK_FIRST] = t
+                ws.fstate[FS_LOCKS + 2 * j + LOCK_LAST] = t
 
 
 @jit

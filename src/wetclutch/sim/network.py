@@ -194,7 +194,7 @@ class Network:
         pwm: bool = False,
         pwm_freq: float = 1000.0,
     ) -> None:
-        """Attach the hydraulic actuator (:mod:`wetclutch.actuator`).
+        """Attach the hydraulic actuator (:mod:`wetclutch.physics.actuator`).
 
         Parameters
         ----------
@@ -316,7 +316,7 @@ class Trajectory:
         m = int(ws.istate[wsp.IS_N_OUT]) if n is None else min(n, int(ws.istate[wsp.IS_N_OUT]))
         n_ev = min(int(ws.istate[wsp.IS_N_LOG]), ws.evlog.shape[0])
         return cls(network=network, t=out_t[:m], x=out_x[:m], aux=out_aux[:m], modes=out_mode[:m],
-                   events=ws.evlog[:n_ev].copy(), locks=ws.locks[: len(network.clutches)].copy(),
+                   events=ws.evlog[:n_ev].copy(), locks=ws.fstate[wsp.FS_LOCKS:].reshape(-1, 2).copy(),
                    stats={"steps": int(ws.istate[wsp.IS_STEPS]), "rejected": int(ws.istate[wsp.IS_REJECTED]),
                           "events": int(ws.istate[wsp.IS_EVENTS]), "mode_switches": int(ws.istate[wsp.IS_SWITCHES])})
 

@@ -39,7 +39,9 @@ FS_LOG_ERR = 2  # log of the previous accepted step's error (PI step control)
 FS_PWM_NEXT = 3  # time of the next PWM edge (-inf: not started)
 FS_PWM_START = 4  # start of the current PWM period
 FS_PWM_H = 5  # + level (0 or 1): the first step after the last edge to that level (0: none yet)
-N_FSTATE = 7
+FS_LOCKS = 7  # + 2 j + LOCK_FIRST / LOCK_LAST: first and last time clutch j locked (-1: never)
+LOCK_FIRST, LOCK_LAST = 0, 1
+N_FSTATE = FS_LOCKS  # without the lock times, which follow, two per clutch
 
 # istate: the integer part
 IS_SETTLE = 0  # modes must be re-decided before the next step
@@ -53,7 +55,6 @@ IS_LAST_EVENT = 7  # event function of the last event
 N_ISTATE = 8
 
 EVENT_LOG = 4096  # rows of the mode-change log (time, clutch, new mode); later changes are counted, not logged
-LOCK_FIRST, LOCK_LAST = 0, 1  # columns of Workspace.locks: first and last time each clutch locked (-1: never)
 
 
 @jit_inline
@@ -68,12 +69,16 @@ def aux_size(nc: int, ng: int, ns: int) -> int:
 
 
 class Workspace(NamedTuple):
-    """Preallocated buffers and the integrator's running state for one network."""
+    """Preallocated buffers and the integrator's running state for one network.
+
+    Non-inlined core functions take it by value: a 26th array made every step of a run
+    10 % slower, so new running state goes into the existing arrays' named slots.
+    """
 
     x: np.ndarray  # current state
     clm: np.ndarray  # clutch modes
     grm: np.ndarray  # gear modes (+1 forward, -1 backward, +-STUCK held at standstill)
-    fstate: np.ndarray  # (N_FSTATE,) see FS_*
+    fstate: np.ndarray  # (N_FSTATE + 2 nc,) see FS_*
     istate: np.ndarray  # (N_ISTATE,) see IS_*
     K: np.ndarray  # (7, nx) stages
     dx: np.ndarray
@@ -94,7 +99,6 @@ class Workspace(NamedTuple):
     released: np.ndarray  # (nc + ng) scratch for the mode decision
     fact: np.ndarray  # (nc + ng) clutch and gear modes the factors in A, G were made for
     evlog: np.ndarray  # (EVENT_LOG, 3): t, clutch index, new mode
-    locks: np.ndarray  # (nc, 2): LOCK_FIRST, LOCK_LAST times
 
 
 def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Workspace:
@@ -107,9 +111,10 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
     ns = net.sp_k.size
     nmat = nb + nc + 2 * ng
     naux = aux_size(nc, ng, ns)
-    fstate = np.zeros(N_FSTATE)
+    fstate = np.zeros(N_FSTATE + 2 * nc)
     fstate[FS_T], fstate[FS_H], fstate[FS_LOG_ERR] = t0, h0, np.log(1e-4)
     fstate[FS_PWM_NEXT], fstate[FS_PWM_START] = -np.inf, t0
+    fstate[FS_LOCKS:] = -1.0
     istate = np.zeros(N_ISTATE, dtype=np.int64)
     istate[IS_SETTLE], istate[IS_LAST_EVENT] = 1, -1
     return Workspace(
@@ -137,5 +142,4 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
         released=np.zeros(nc + ng, dtype=np.int64),
         fact=np.full(nc + ng, NO_MODE, dtype=np.int64),
         evlog=np.zeros((EVENT_LOG, 3)),
-        locks=np.full((max(nc, 1), 2), -1.0),
     )
