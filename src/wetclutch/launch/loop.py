@@ -167,28 +167,6 @@ def reference(cond: Conditions, t: np.ndarray) -> np.ndarray:
     return np.where(tau >= 0.0, r, 0.0)
 
 
-def reference(cond: Conditions, t: np.ndarray) -> np.ndarray:
-    """The torque request on the sample times ``t`` (zero before the request)."""
-    tau = t - cond.t_request
-    if cond.profile == "step":
-        r = np.full(t.size, cond.t_ref)
-    elif cond.profile == "ramp":
-        r = cond.t_ref * np.clip(tau / RAMP_TIME, 0.0, 1.0)
-    else:
-        try:
-            f = pd.read_csv(cond.profile)
-            tt = np.asarray(f["time"], dtype=float)
-            rr = np.asarray(f["t_ref"], dtype=float)
-        except (OSError, KeyError, ValueError, pd.errors.ParserError) as e:
-            raise WetclutchError(f"--profile {cond.profile}: needs numeric columns 'time' and 't_ref' ({type(e).__name__})") from None
-        if tt.size < 2 or not np.all(np.isfinite(tt)) or not np.all(np.isfinite(rr)) or np.any(np.diff(tt) <= 0):
-            raise WetclutchError(f"--profile {cond.profile}: 'time' must increase and all values be finite")
-        if np.any(rr < 0) or np.any(rr > 1000):
-            raise WetclutchError(f"--profile {cond.profile}: 't_ref' must be in 0..1000 N m")
-        r = np.interp(tau, tt, rr)
-    return np.where(tau >= 0.0, r, 0.0)
-
-
 @dataclass
 class LaunchResult:
     """A launch: measured signals (plus ``t_ref`` and ``u``), true signals, and its figures."""

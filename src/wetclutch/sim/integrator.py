@@ -120,6 +120,17 @@ def _pwm_edge(t, ws, net, ext):
 
 
 @jit_inline
+def _time_event(t, hit_bp, hit_pwm, bp_i, after_edge, ws, net, ext):
+    """Pass the breakpoint or PWM edge at ``t``: the next breakpoint's index, the PWM level the next step
+    follows (-1: none), and False if the modes cannot be decided there."""
+    if hit_bp:
+        bp_i += 1
+    if hit_pwm:
+        after_edge = _pwm_edge(t, ws, net, ext)
+    return bp_i, after_edge, _restart(ws, net, ext)
+
+
+@jit_inline
 def _step_limit(t, t_stop, h_max, bp_i, pwm, ws, net):
     """The next step: ``(h, at_lim, hit_bp, hit_pwm)``, cut to end on the next breakpoint, PWM edge or ``t_stop``."""
     h = min(ws.fstate[FS_H], h_max)
@@ -248,11 +259,8 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
         if h <= 0.0:
             # a breakpoint or PWM edge at the current time
             if hit_bp or hit_pwm:
-                if hit_bp:
-                    bp_i += 1
-                if hit_pwm:
-                    after_edge = _pwm_edge(t, ws, net, ext)
-                if not _restart(ws, net, ext):
+                bp_i, after_edge, ok = _time_event(t, hit_bp, hit_pwm, bp_i, after_edge, ws, net, ext)
+                if not ok:
                     return ERR_SINGULAR
                 continue
             break
@@ -295,11 +303,8 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
             ws.fstate[FS_PWM_H + after_edge] = h / fac  # what this first step after the edge should have been
             after_edge = -1
         if at_lim and (hit_bp or hit_pwm):
-            if hit_bp:
-                bp_i += 1
-            if hit_pwm:
-                after_edge = _pwm_edge(t, ws, net, ext)
-            if not _restart(ws, net, ext):
+            bp_i, after_edge, ok = _time_event(t, hit_bp, hit_pwm, bp_i, after_edge, ws, net, ext)
+            if not ok:
                 return ERR_SINGULAR
         else:
             copy(ws.K[0], ws.K[6])
