@@ -70,6 +70,7 @@ def identified_params(prior: Params, est: dict[str, Estimate]) -> Params:
     if "mu_slip_poly" in est:
         sets["friction.mu_slip_poly"] = list(est["mu_slip_poly"].value)
         sets["friction.mu_scale"] = 1.0
+        sets["friction.mu_slope"] = 1.0
     ratio = est["ratio"].value if "ratio" in est else prior.driveline.ratio
     if "ratio" in est:
         sets["driveline.ratio"] = ratio
