@@ -22,12 +22,15 @@ from __future__ import annotations
 
 import functools
 import json
+import tomllib
 from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..errors import WetclutchError
-from ..params import Params
+from ..params import Params, flatten
 from ..physics import actuator, friction
 from ..plant import clutch
 from ..rig.experiments import INPUT_RANGE
@@ -383,3 +386,27 @@ def with_settings(d: Design, **changes: float) -> Design:
         raise WetclutchError(f"unknown setting '{unknown[0]}' of the {d.kind} controller")
     return replace(d, settings=d.settings | {k: float(v) for k, v in changes.items()},
                    sources=d.sources | {k: "changed" for k in changes})
+
+
+def plant_origin(param_file: str | Path | None, sets: dict[str, Any] | None = None) -> dict[str, str]:
+    """How each parameter of a plant given on the command line was obtained, for the settings' sources.
+
+    ``--set`` overrides first, then, for a parameter file written by ``wetclutch identify``
+    (an ``identified.json`` beside it), ``identified`` or ``prior``; else ``parameter file``
+    for the keys the file sets. Unlisted parameters are the defaults.
+    """
+    out: dict[str, str] = {}
+    if param_file is not None:
+        path = Path(param_file)
+        try:
+            out |= {k: "parameter file" for k in flatten(tomllib.loads(path.read_text()))}
+        except (OSError, tomllib.TOMLDecodeError):
+            pass  # the parameter loader reports an unreadable file
+        ident = path.with_name("identified.json")
+        if ident.is_file():
+            try:
+                found = json.loads(ident.read_text()).get("parameters", {})
+            except (OSError, ValueError):
+                found = {}
+            out |= {k: str(v) for k, v in found.items() if isinstance(v, str)}
+    return out | {k: "--set" for k in (sets or {})}
