@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import NoReturn
 
 from . import params as params_mod
@@ -136,12 +137,11 @@ def _design(args: argparse.Namespace, plant: params_mod.Params, origin: dict[str
     return design.design(plant, kind or args.controller or "launch", origin)
 
 
-def _replay_args(args: argparse.Namespace, kind: str) -> str:
-    """Options that make ``wetclutch launch`` replay a sample of this command."""
+def _replay_args(args: argparse.Namespace, controller_file: str) -> str:
+    """Options that make ``wetclutch launch`` replay a sample: the plant's file and the controller file written
+    beside the results (the design, not one made anew on the sample's plant)."""
     out = f" --param-file {args.param_file}" if args.param_file else ""
-    if getattr(args, "controller_file", None) and kind != "baseline":
-        return out + f" --controller-file {args.controller_file}"
-    return out + f" --controller {kind}"
+    return out + f" --controller-file {Path(args.out) / controller_file}"
 
 
 def _cmd_design(args: argparse.Namespace) -> None:
@@ -190,8 +190,8 @@ def _cmd_verify(args: argparse.Namespace) -> None:
     rs = ranges.load(args.ranges)
     d = _design(args, p, origin)
     res = verify.run(d, p, args.samples, args.seed, args.workers, rs, progress=not args.quiet,
-                     replay_args=_replay_args(args, d.kind))
-    verify_report.write(res, args.out)
+                     replay_args=_replay_args(args, "controller.toml"))
+    verify_report.write(res, args.out, d)
     print(f"verify {d.kind}: {res['cases']} launches, all requirements in {100 * res['pass_rate']:.1f} % "
           f"({_rates(res)}) -> {args.out}")
 
@@ -208,8 +208,8 @@ def _cmd_report(args: argparse.Namespace) -> None:
     b = (settings.load(args.baseline_file, "baseline") if args.baseline_file
          else _design(args, p, origin, "baseline"))
     job = campaign.main_job(p, d, b, rs, args.samples, args.baseline_samples, args.seed, args.workers,
-                            progress=not args.quiet, replay_args=_replay_args(args, "launch"),
-                            baseline_replay_args=_replay_args(args, "baseline"))
+                            progress=not args.quiet, replay_args=_replay_args(args, "controller.toml"),
+                            baseline_replay_args=_replay_args(args, "baseline.toml"))
     s = report.write(job, args.out)
     same = s["same_samples"]
     print(f"report: launch controller meets all requirements in {100 * s['verify']['pass_rate']:.1f} % of "

@@ -113,8 +113,11 @@ FF_TABLE = FILL_T + N_FILL_T  # start of the (nt, np) table of input voltage vs 
 N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power first
 
 # --- controller state
-CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED = range(11)
-N_CS = 11
+CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED = range(12)
+N_CS = 12
+#: a jump of the filtered pressure this far above the hold pressure in the hold: the plates have stopped the
+#: piston and the valve, open for the stroke's flow, has trapped the pressure high (Pa)
+CONTACT_JUMP = 0.1e5
 FILL, HOLD, TORQUE, LOCKUP = 0, 1, 2, 3
 SYNC_SLIP = 2.0  # rad/s: measured slip below which the clutch counts as synchronised
 
@@ -224,6 +227,11 @@ def _pressure_loop(ctrl, cs, p_set, p, temp, hold, dt):
     # current, not the rising branch the map was measured on: shift the map by the play
     shift = 0.0 if hold else ctrl[FF_SHIFT_T]
     u = _table(ctrl, temp, p_set) - shift + cs[CS_ZP] + kp * e_p
+    if hold and cs[CS_PF] < ctrl[P_KISS]:
+        # the piston still strokes: the flow it takes makes the pressure droop below the
+        # valve's static equilibrium, and an integrator wound up against that droop slams
+        # the pressure up when the plates stop the piston
+        ki = 0.0
     if u > ctrl[U_MAX]:
         u = ctrl[U_MAX]
         if e_p < 0.0:
@@ -270,6 +278,14 @@ def _launch(ctrl, cs, meas, t_ref):
         phase = HOLD
         cs[CS_PSET] = p
         cs[CS_DIP] = ctrl[DIP_N]
+    if phase == HOLD and cs[CS_DUMPED] == 0.0 and t_ref <= 0.0 and cs[CS_PF] > p_hold + CONTACT_JUMP:
+        # contact: the stem sits in its overlap with the pressure trapped above the hold and only
+        # the seal leakage would bring it down (creep on the waiting vehicle); dip the input
+        # once so that the drain port opens, and forget what the integrator learnt in the stroke
+        cs[CS_DUMPED] = 1.0
+        cs[CS_DIP] = ctrl[DIP_N]
+        cs[CS_ZP] = 0.0
+        cs[CS_PSET] = p_hold
     if phase == HOLD and cs[CS_DIP] > 0.0:
         # after the full-input fill the magnet sits on the descending branch of its
         # hysteresis and would hold the valve open; a short dip of the input brings it

@@ -34,8 +34,11 @@ static value ``T_ss``
     Largest rate of change of the smoothed ``T_r`` (N m/s) between the request
     and synchronisation: the vehicle's jerk is this over its inertia.
 ``creep_Nm``
-    Largest mean of ``T_r`` over :data:`CREEP_WINDOW` before the request: what the clutch
+    Mean of ``T_r`` over the last :data:`CREEP_WINDOW` before the request: what the clutch
     in standby pushes into a waiting vehicle.
+``standby_peak_Nm``
+    Largest mean of ``T_r`` over any :data:`PEAK_WINDOW` before the request: the jolt of
+    the plates' first contact (reported, not judged).
 robustness
     The launch's response compared with the nominal launch (the design on its own plant,
     that plant's oil temperature, same request): ``t95_settled`` within :data:`ROBUST_DT95`
@@ -62,7 +65,8 @@ REQ_CREEP_NM = 10.0
 STEADY_START, STEADY_END = 0.3, 1.3  # s after the request
 MIN_WINDOW = 0.1  # s
 SMOOTH = 0.01  # s
-CREEP_WINDOW = 0.1  # s
+CREEP_WINDOW = 0.2  # s
+PEAK_WINDOW = 0.1  # s
 #: the requirements, in the order reports list them
 REQUIREMENTS = ("steady_state_error", "response_time", "robustness", "standby")
 
@@ -79,11 +83,13 @@ class Response:
     ripple_pct: float
     jerk_max: float
     creep_Nm: float
+    standby_peak_Nm: float
     window: tuple[float, float]
 
     @classmethod
-    def empty(cls, creep: float = np.nan, window: tuple[float, float] = (np.nan, np.nan)) -> Response:
-        return cls(np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, creep, window)
+    def empty(cls, standby: tuple[float, float] = (np.nan, np.nan),
+              window: tuple[float, float] = (np.nan, np.nan)) -> Response:
+        return cls(np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, *standby, window)
 
 
 def _smooth(t: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -96,28 +102,34 @@ def _smooth(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     return out
 
 
-def _creep(t: np.ndarray, T_r: np.ndarray, t_req: float) -> float:
+def _standby(t: np.ndarray, T_r: np.ndarray, t_req: float) -> tuple[float, float]:
+    """(creep, peak): the mean of ``T_r`` over the last :data:`CREEP_WINDOW` before the request, the largest
+    :data:`PEAK_WINDOW` mean before it."""
     before = t < t_req
-    n = max(1, int(round(CREEP_WINDOW / np.median(np.diff(t))))) if t.size > 1 else 1
     y = T_r[before]
+    if y.size == 0:
+        return np.nan, np.nan
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    creep = float(np.mean(y[t[before] >= t_req - CREEP_WINDOW]))
+    n = max(1, int(round(PEAK_WINDOW / dt)))
     if y.size < n:
-        return float(np.mean(y)) if y.size else np.nan
+        return creep, float(np.mean(y))
     c = np.cumsum(np.concatenate([[0.0], y]))
-    return float(np.max((c[n:] - c[:-n]) / n))
+    return creep, float(np.max((c[n:] - c[:-n]) / n))
 
 
 def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_sync: float | None) -> Response:
     """Figures of the response of ``T_r`` to the request ``t_ref`` made at ``t_req``."""
     t_end = t[-1] if t_sync is None else t_sync
     w0, w1 = t_req + STEADY_START, min(t_req + STEADY_END, t_end - 0.1)
-    creep = _creep(t, T_r, t_req)
+    standby = _standby(t, T_r, t_req)
     if w1 - w0 < MIN_WINDOW:
-        return Response.empty(creep, (w0, w1))
+        return Response.empty(standby, (w0, w1))
     win = (t >= w0) & (t <= w1)
     T_ss = float(np.mean(T_r[win]))
     ref = float(np.mean(t_ref[win]))
     if not ref > 0.0:  # no torque asked for over the window: no relative error, no 95 % level
-        return Response.empty(creep, (w0, w1))
+        return Response.empty(standby, (w0, w1))
     ess = abs(T_ss - ref) / ref * 100.0
     after = t >= t_req
     y = _smooth(t, T_r)
@@ -137,7 +149,7 @@ def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_
     slip = after & (t < t_end)
     rate = np.abs(np.diff(y)) / np.diff(t)
     jerk = float(np.max(rate[slip[1:]])) if np.any(slip[1:]) else np.nan
-    return Response(T_ss, ess, t95, settled, overshoot, ripple, jerk, creep, (w0, w1))
+    return Response(T_ss, ess, t95, settled, overshoot, ripple, jerk, *standby, (w0, w1))
 
 
 def requirements(r: Response, nominal: Response) -> dict[str, bool]:

@@ -94,7 +94,7 @@ def parse(data: dict[str, Any], source: str = "ranges") -> list[Range]:
     defaults = Params().model_dump()
     out = []
     for name, raw in data.items():
-        where = f"{source}: [{name}]"
+        where = f"{source}: [{name.encode('unicode_escape').decode()}]"
         if not isinstance(raw, dict):
             raise _err(where, "must be a table (target, how, low, high, ...)")
         unknown = sorted(set(raw) - KEYS)

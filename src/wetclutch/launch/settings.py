@@ -13,6 +13,7 @@ Layout::
     pressures_Pa = [...]            #                  pressures
     input_V = [[...], ...]          #                  input for each (temperature, pressure)
     fill_s = [...]                  # the baseline's fill pulse per temperature
+    source, fill_source = "..."     # where the tables came from
     [plant]                         # the parameter set the controller was designed on
     ...
 
@@ -48,7 +49,7 @@ def to_toml(d: Design) -> str:
                      for name, spec in SETTINGS[d.kind].items()},
         "tables": {"temps_C": d.temps_C.tolist(), "pressures_Pa": d.pressures_Pa.tolist(),
                    "input_V": d.input_V.tolist(), "fill_s": d.fill_s.tolist(),
-                   "source": d.sources.get("input_V", "")},
+                   "source": d.sources.get("input_V", ""), "fill_source": d.sources.get("fill_s", "")},
         "plant": d.plant.model_dump(),
     }
     head = f"# wetclutch controller file: the {d.kind} controller, SI units (each setting's unit beside it)\n"
@@ -135,7 +136,9 @@ def loads(text: str, source: str = "controller file", kind: str | None = None) -
         plant = load_params(None, flatten(data["plant"]))
     except ParameterError as e:
         raise _err(f"{source}: [plant]", str(e)) from None
-    sources["input_V"] = str(tables.get("source", ""))
+    for key, name in (("source", "input_V"), ("fill_source", "fill_s")):
+        if tables.get(key):
+            sources[name] = str(tables[key])
     return Design(k, plant, values, sources, temps, pressures, table, fill)
 
 

@@ -31,7 +31,7 @@ from .design import Design
 
 NOMINAL_LEVELS = np.array([25.0, 50.0, 100.0, 150.0, 200.0])
 N_BINS = 4
-METRICS = ("steady_state_error_pct", "t95_s", "t95_settled_s", "overshoot_pct", "ripple_pct", "jerk_max", "creep_Nm",
+METRICS = ("steady_state_error_pct", "t95_s", "t95_settled_s", "overshoot_pct", "ripple_pct", "jerk_max", "creep_Nm", "standby_peak_Nm",
            "slip_energy_J", "t_sync_s")
 
 

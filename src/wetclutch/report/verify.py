@@ -9,6 +9,8 @@ import numpy as np
 import pandas as pd
 
 from ..launch import metrics
+from ..launch.design import Design
+from ..launch.settings import to_toml
 from ..output import atomic_dir, write_json
 from .plots import plt
 
@@ -100,9 +102,11 @@ def bins_table(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def write(result: dict[str, Any], out: str | Path) -> None:
-    """``verify.json``, ``verify.md``, ``samples.csv`` and ``histograms.png``, written atomically."""
+def write(result: dict[str, Any], out: str | Path, design: Design) -> None:
+    """``verify.json``, ``verify.md``, ``samples.csv``, ``histograms.png`` and the verified ``controller.toml``
+    (which the replay commands name), written atomically."""
     with atomic_dir(out) as d:
+        (d / "controller.toml").write_text(to_toml(design))
         write_json(d / "verify.json", result)
         (d / "verify.md").write_text("# Verification\n\n" + verify_table(result) + "\n\n## Pass rate per range bin\n\n"
                                      + bins_table(result) + "\n\n![histograms](histograms.png)\n")
