@@ -113,8 +113,25 @@ FF_TABLE = FILL_T + N_FILL_T  # start of the (nt, np) table of input voltage vs 
 N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power first
 
 # --- controller state
-CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED = range(12)
-N_CS = 12
+(CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED, CS_KISS,
+ CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM) = range(18)
+N_CS = 18
+#: samples of a calm, risen pressure (above the first ARM_P, no steep rise) before a steep rise counts as contact:
+#: the jump from empty to the reset spring's prestress at the start of the fill is not one
+ARM_N = 10
+ARM_P = 0.05e5
+#: the pressure averaged over 5 ms exceeding the one averaged over 20 ms by this much (Pa) is the steep rise of
+#: the plates' contact (the oil volume becomes a thousand times stiffer than the reset spring); the stroke, a
+#: pressure ramp of a few bar/s, stays well below it
+JUMP = 0.1e5
+#: filtered axle torque (N m) that marks the plates' first contact: the kiss point is found there
+ONSET_NM = 3.0
+#: while holding without torque, the believed kiss point rises at this rate (Pa/s), at most SEARCH_SPAN above the design's
+SEARCH_RATE = 1.0e5
+SEARCH_SPAN = 0.6e5
+#: while the kiss point is not found, the hold's set point may lead the pressure this far (Pa): the piston must
+#: stroke on, and a contact is caught by its pressure jump
+SEARCH_LEAD = 0.1e5
 #: a jump of the filtered pressure this far above the hold pressure in the hold: the plates have stopped the
 #: piston and the valve, open for the stroke's flow, has trapped the pressure high (Pa)
 CONTACT_JUMP = 0.1e5
@@ -145,12 +162,13 @@ def _mu(ctrl, slip):
 
 
 @_inline
-def _pressure_target(ctrl, t_ref, slip, theta):
-    """Pressure (Pa) that gives axle torque ``t_ref`` under the nominal friction law scaled by ``theta``."""
+def _pressure_target(ctrl, kiss, t_ref, slip, theta):
+    """Pressure (Pa) that gives axle torque ``t_ref`` under the nominal friction law scaled by ``theta``, with the
+    plates touching at ``kiss``."""
     mu = _mu(ctrl, slip) * theta
     t_c = max(t_ref, 0.0) * ctrl[RATIO] / ctrl[ETA]
     f_n = friction.force_for(t_c / mu, ctrl[F_KNEE])
-    return ctrl[P_KISS] + f_n / ctrl[A_P]
+    return kiss + f_n / ctrl[A_P]
 
 
 @_inline
@@ -166,14 +184,14 @@ def _hold_setpoint(ctrl, cs, dt, p_hold):
     """The hold's pressure set point: rising at ``HOLD_RATE`` to the hold pressure, never far above the pressure
     there is (a valve set far above the stroke pressure opens wide and slams the pressure up when the plates touch)."""
     cs[CS_PSET] = min(cs[CS_PSET] + ctrl[HOLD_RATE] * dt, p_hold)
-    return min(cs[CS_PSET], cs[CS_PF] + ctrl[HOLD_LEAD])
+    return min(cs[CS_PSET], cs[CS_PF] + (ctrl[HOLD_LEAD] if cs[CS_FOUND] != 0.0 else SEARCH_LEAD))
 
 
 @_inline
 def _friction_estimate(ctrl, cs, meas, p, slip, dt):
     """Low-pass the friction factor: measured torque over the nominal model's at the measured pressure, once the
     plates press hard enough for the ratio to mean something."""
-    f_n = friction.normal_force(p, ctrl[P_KISS], ctrl[A_P])
+    f_n = friction.normal_force(p, cs[CS_KISS], ctrl[A_P])
     if f_n > ctrl[F_KNEE] * 1.5:
         t_model = ctrl[ETA] / ctrl[RATIO] * _mu(ctrl, slip) * f_n * friction.knee(f_n, ctrl[F_KNEE])
         theta = min(max(meas[M_TR] / t_model, 0.5), 2.0)
@@ -200,8 +218,8 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     slip = meas[M_WP] - meas[M_WS] / ctrl[RATIO]
     _friction_estimate(ctrl, cs, meas, p, slip, dt)
     th = cs[CS_THETA]
-    p_r = _pressure_target(ctrl, r, slip, th)
-    sens = _pressure_target(ctrl, r + 1.0, slip, th) - p_r  # Pa per N m
+    p_r = _pressure_target(ctrl, cs[CS_KISS], r, slip, th)
+    sens = _pressure_target(ctrl, cs[CS_KISS], r + 1.0, slip, th) - p_r  # Pa per N m
     p_set = p_r + cs[CS_ZT] + ctrl[KP_T] * sens * e_t
     p_set = min(max(p_set, p_hold), ctrl[P_MAX])
     if gated:
@@ -227,7 +245,7 @@ def _pressure_loop(ctrl, cs, p_set, p, temp, hold, dt):
     # current, not the rising branch the map was measured on: shift the map by the play
     shift = 0.0 if hold else ctrl[FF_SHIFT_T]
     u = _table(ctrl, temp, p_set) - shift + cs[CS_ZP] + kp * e_p
-    if hold and cs[CS_PF] < ctrl[P_KISS]:
+    if hold and cs[CS_PF] < cs[CS_KISS]:
         # the piston still strokes: the flow it takes makes the pressure droop below the
         # valve's static equilibrium, and an integrator wound up against that droop slams
         # the pressure up when the plates stop the piston
@@ -260,17 +278,50 @@ def _dither(ctrl, cs, u, hold):
     return min(max(u + d, ctrl[U_MIN]), ctrl[U_MAX])
 
 
+@_inline
+def _find_kiss(ctrl, cs, meas, t_ref, phase, dt):
+    """Find the real kiss point in the launch: the pressure at which the plates start to carry torque.
+
+    The steep pressure rise at contact (:data:`JUMP`) places it where the stroke's pressure ended; a gentle
+    approach, which has no such rise, is placed by the torque onset (the filtered ``T_r`` above
+    :data:`ONSET_NM`): the measured pressure less what the nominal friction law needs for that torque. A clutch that holds at the believed kiss point without any
+    torque has it higher: the belief then rises at :data:`SEARCH_RATE` until the torque comes. Before it is
+    found, the kiss point is the one learnt on earlier launches (the loop sets it) or the design's.
+    """
+    if cs[CS_FOUND] != 0.0:
+        return
+    rise = cs[CS_PF5] - cs[CS_PF]
+    if cs[CS_CALM] < ARM_N:
+        cs[CS_CALM] = cs[CS_CALM] + 1.0 if (cs[CS_PF] > ARM_P and rise < 0.25 * JUMP) else 0.0
+    if cs[CS_CALM] >= ARM_N and rise > JUMP:
+        # the steep rise of contact: the 20 ms average still holds about the pressure the stroke ended at (a step
+        # crosses the threshold when that average has taken a third of JUMP of it)
+        cs[CS_KISS] = cs[CS_PF] - JUMP / 3.0
+        cs[CS_FOUND] = 1.0
+    elif cs[CS_TF] > ONSET_NM:
+        slip = meas[M_WP] - meas[M_WS] / ctrl[RATIO]
+        cs[CS_KISS] = cs[CS_PF] - _pressure_target(ctrl, 0.0, ONSET_NM, slip, 1.0)
+        cs[CS_FOUND] = 1.0
+    elif phase == HOLD and t_ref <= 0.0 and cs[CS_DIP] <= 0.0 and cs[CS_PF] > cs[CS_KISS] - SEARCH_LEAD:
+        cs[CS_KISS] = min(cs[CS_KISS] + SEARCH_RATE * dt, ctrl[P_KISS] + SEARCH_SPAN)
+
+
 @_jit
 def _launch(ctrl, cs, meas, t_ref):
     dt = ctrl[DT]
     p = meas[M_P]
     temp = meas[M_TEMP]
     phase = int(cs[CS_PHASE])
-    p_hold = ctrl[P_KISS] + ctrl[HOLD_OFFSET]
-    # pressure averaged over some 20 ms: the fill decisions must not trip on sensor noise
-    cs[CS_PF] = p if cs[CS_K] == 0.0 else cs[CS_PF] + (p - cs[CS_PF]) * dt / (0.02 + dt)
+    # pressure and torque averaged over some 20 ms: the fill decisions must not trip on sensor noise
+    first = cs[CS_N] == 0.0
+    cs[CS_N] += 1.0
+    cs[CS_PF] = p if first else cs[CS_PF] + (p - cs[CS_PF]) * dt / (0.02 + dt)
+    cs[CS_TF] = meas[M_TR] if first else cs[CS_TF] + (meas[M_TR] - cs[CS_TF]) * dt / (0.02 + dt)
+    cs[CS_PF5] = p if first else cs[CS_PF5] + (p - cs[CS_PF5]) * dt / (0.005 + dt)
+    _find_kiss(ctrl, cs, meas, t_ref, phase, dt)
+    p_hold = cs[CS_KISS] + ctrl[HOLD_OFFSET]
     if phase == FILL:
-        if p < ctrl[P_KISS] - _fill_exit(ctrl, temp):
+        if p < cs[CS_KISS] - _fill_exit(ctrl, temp):
             cs[CS_U] = ctrl[U_MAX]
             return ctrl[U_MAX]
         # the piston has stroked most of the way: approach the kiss point gently, since

@@ -54,7 +54,7 @@ class Setting:
 _P = (0.0, 5e6)
 #: the launch controller's settings that every plant shares, with their values
 LAUNCH_DEFAULTS = {
-    "hold_offset": 0.05e5, "fill_exit": 0.1e5, "fill_exit_cold": 0.05e5, "hold_rate": 1.0e5, "hold_lead": 0.01e5,
+    "hold_offset": 0.02e5, "fill_exit": 0.1e5, "fill_exit_cold": 0.05e5, "hold_rate": 1.0e5, "hold_lead": 0.01e5,
     "req_lead": 0.2e5, "kp_p": 0.05e-5, "ki_p": 5.0e-5, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
     "ki_t": 8.0, "tau_ref": 0.03, "tau_theta": 0.01, "theta0": 1.4, "dither_amp": 0.05, "dither_hz": 125.0,
     "dither_amp_torque": 0.3, "dither_hz_torque": 125.0, "ff_shift_torque": 1.0, "dip": 0.5, "dip_time": 0.015,

@@ -36,6 +36,7 @@ from ..sim.workspace import IS_SETTLE, LOCKED, OK, new_workspace
 from . import controller as control
 from . import design as design_
 from . import metrics
+from .adaptation import Adaptation
 
 _jit = njit(cache=True, error_model="numpy")
 
@@ -176,6 +177,8 @@ class LaunchResult:
     conditions: Conditions
     controller: str
     stats: dict[str, int] = field(default_factory=dict)
+    kiss_found_Pa: float | None = None
+    adaptation: Adaptation = field(default_factory=Adaptation)
 
 
 def _design(plant: Params, controller: design_.Design | str) -> design_.Design:
@@ -187,7 +190,8 @@ def _design(plant: Params, controller: design_.Design | str) -> design_.Design:
 
 
 def simulate(params: Params | None = None, controller: design_.Design | str = "launch",
-             conditions: Conditions | None = None, nominal: metrics.Response | None = None) -> LaunchResult:
+             conditions: Conditions | None = None, nominal: metrics.Response | None = None,
+             adaptation: Adaptation | None = None) -> LaunchResult:
     """Run one closed-loop launch.
 
     Parameters
@@ -203,6 +207,9 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     nominal
         The nominal launch's response, for the robustness requirement (default: the
         design on its own plant at that plant's oil temperature, same request).
+    adaptation
+        What the launch controller learnt on earlier launches (default: nothing); the
+        result carries the state after this launch.
     """
     p = params if params is not None else Params()
     d = _design(p, controller)
@@ -223,6 +230,9 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     out_meas = np.zeros((n, N_CH))
     out_u = np.zeros(n)
     cs = np.zeros(control.N_CS)
+    learnt = adaptation or Adaptation()
+    start = learnt.kiss(temp) if d.kind == "launch" else None
+    cs[control.CS_KISS] = d.settings["p_kiss"] if start is None else start
     status, m = _closed_loop(net, ext, ws, 0, probe, temp, sensors, noise, ctrl, cs, t_ref, cond.dt, cond.t_after,
                              *out, out_meas, out_u)
     if status != OK:
@@ -248,7 +258,12 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
         nominal = nominal_response(d, cond)
     summary = metrics.summary(resp, nominal, slip_energy=float(truth["E_clutch"].iloc[-1]), t_sync=t_sync)
     summary.update(controller=d.kind, t_ref_Nm=cond.t_ref, profile=str(cond.profile), oil_temp_C=temp)
-    return LaunchResult(signals, truth, summary, cond, d.kind, tr.stats)
+    found = float(cs[control.CS_KISS]) if d.kind == "launch" and cs[control.CS_FOUND] else None
+    kiss_start = (d.settings["p_kiss"] if start is None else start) if d.kind == "launch" else None
+    summary.update(kiss_start_Pa=kiss_start, kiss_found_Pa=found)
+    if found is not None:
+        learnt = learnt.learn(temp, found)
+    return LaunchResult(signals, truth, summary, cond, d.kind, tr.stats, found, learnt)
 
 
 _NOMINAL: dict[tuple[str, Conditions], metrics.Response] = {}

@@ -1,0 +1,93 @@
+"""What the launch controller learns across launches: the kiss point per oil-temperature band.
+
+Within a launch the controller finds the real kiss point (torque onset, or a search
+upward from where it believed it; :mod:`wetclutch.launch.controller`). Across launches,
+as production transmissions do, it keeps what it found in an adaptation state per band
+of :data:`BAND_C` of oil temperature, which the next launch at that temperature starts
+from: it then fills to the right place, so it neither slams nor creeps. The state is a
+small TOML file (``launch``/``verify --sequence``, ``--adaptation``).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import tomli_w
+
+from ..errors import WetclutchError
+from ..params import OIL_TEMP_RANGE_C
+
+BAND_C = 20.0
+#: weight of a new finding against what was learnt (exponential forgetting: drift is followed, noise averaged)
+GAIN = 0.5
+
+
+def band(temp_C: float) -> int:
+    """The band of oil temperature ``temp_C``: bands of :data:`BAND_C` from the lowest allowed temperature."""
+    return int((temp_C - OIL_TEMP_RANGE_C[0]) // BAND_C)
+
+
+@dataclass(frozen=True)
+class Adaptation:
+    """Learnt kiss points (Pa) and the number of launches behind each, by temperature band."""
+
+    kiss_Pa: dict[int, float] = field(default_factory=dict)
+    launches: dict[int, int] = field(default_factory=dict)
+
+    def kiss(self, temp_C: float) -> float | None:
+        """The learnt kiss point at ``temp_C``, or None if nothing was learnt in its band."""
+        return self.kiss_Pa.get(band(temp_C))
+
+    def learn(self, temp_C: float, found_Pa: float) -> Adaptation:
+        """The state after a launch at ``temp_C`` that found the kiss point at ``found_Pa``."""
+        b = band(temp_C)
+        old = self.kiss_Pa.get(b)
+        new = found_Pa if old is None else old + GAIN * (found_Pa - old)
+        return Adaptation(self.kiss_Pa | {b: new}, self.launches | {b: self.launches.get(b, 0) + 1})
+
+    def to_toml(self) -> str:
+        bands = [{"from_C": OIL_TEMP_RANGE_C[0] + b * BAND_C, "to_C": OIL_TEMP_RANGE_C[0] + (b + 1) * BAND_C,
+                  "kiss_Pa": v, "launches": self.launches.get(b, 0)} for b, v in sorted(self.kiss_Pa.items())]
+        return "# wetclutch adaptation state: kiss point learnt per oil-temperature band (Pa)\n" + tomli_w.dumps(
+            {"band_C": BAND_C, "band": bands})
+
+
+def loads(text: str, source: str = "adaptation file") -> Adaptation:
+    """An adaptation state from its TOML text (one-line errors naming the field)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise WetclutchError(f"{source}: not valid TOML: {str(e).splitlines()[0]}") from None
+    if data.get("band_C") != BAND_C:
+        raise WetclutchError(f"{source}: band_C must be {BAND_C:g} (got {data.get('band_C')!r})")
+    kiss, count = {}, {}
+    rows = data.get("band", [])
+    if not isinstance(rows, list):
+        raise WetclutchError(f"{source}: band must be an array of tables")
+    for i, row in enumerate(rows):
+        where = f"{source}: band[{i}]"
+        if not isinstance(row, dict):
+            raise WetclutchError(f"{where}: must be a table")
+        lo, v, n = row.get("from_C"), row.get("kiss_Pa"), row.get("launches", 1)
+        for key, x in (("from_C", lo), ("kiss_Pa", v)):
+            if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
+                raise WetclutchError(f"{where}.{key}: must be a finite number (got {x!r})")
+        if not 0.0 <= v <= 5e6:
+            raise WetclutchError(f"{where}.kiss_Pa: {v:g} Pa is outside 0..5e6")
+        if not isinstance(n, int) or n < 0:
+            raise WetclutchError(f"{where}.launches: must be a whole number >= 0 (got {n!r})")
+        b = band(lo + 0.5 * BAND_C)
+        kiss[b], count[b] = float(v), n
+    return Adaptation(kiss, count)
+
+
+def load(path: str | Path) -> Adaptation:
+    """The adaptation state in file ``path``."""
+    try:
+        text = Path(path).read_text()
+    except OSError as e:
+        raise WetclutchError(f"cannot read adaptation file '{path}': {e.strerror}") from None
+    return loads(text, str(path))
