@@ -162,10 +162,14 @@ def _cmd_launch(args: argparse.Namespace) -> None:
 
     p, origin = _plant(args)
     d = _design(args, p, origin)
+    from .launch import adaptation
+
     cond = launch.Conditions(t_ref=args.t_ref, profile=args.profile, oil_temp_C=args.oil_temp, seed=args.seed,
                              noise=not args.no_noise, noise_scale=args.noise_scale)
-    res = launch.simulate(p, d, cond)
-    launch_report.write(res, args.out, p)
+    start = adaptation.load(args.adaptation) if args.adaptation else None
+    runs = launch.sequence(p, d, cond, args.sequence, start)
+    res = runs[-1]
+    launch_report.write(res, args.out, p, runs)
     s = res.summary
     req = ", ".join(f"{k} {'pass' if v else 'FAIL'}" for k, v in s["requirements"].items())
     fmt = lambda v, f: "-" if v is None else format(v, f)  # noqa: E731
@@ -190,10 +194,12 @@ def _cmd_verify(args: argparse.Namespace) -> None:
     rs = ranges.load(args.ranges)
     d = _design(args, p, origin)
     res = verify.run(d, p, args.samples, args.seed, args.workers, rs, progress=not args.quiet,
-                     replay_args=_replay_args(args, "controller.toml"))
+                     replay_args=_replay_args(args, "controller.toml"), sequence=args.sequence)
     verify_report.write(res, args.out, d)
-    print(f"verify {d.kind}: {res['cases']} launches, all requirements in {100 * res['pass_rate']:.1f} % "
-          f"({_rates(res)}) -> {args.out}")
+    seq = (f"; after {args.sequence} launches of each clutch (first launch {100 * res['pass_rate_first_launch']:.1f} %,"
+           f" {res['slams']} slams)" if args.sequence > 1 else "")
+    print(f"verify {d.kind}: {res['cases']} clutches, all requirements in {100 * res['pass_rate']:.1f} % "
+          f"({_rates(res)}){seq} -> {args.out}")
 
 
 def _cmd_report(args: argparse.Namespace) -> None:
@@ -295,6 +301,10 @@ def build_parser() -> argparse.ArgumentParser:
     lau.add_argument("--seed", type=int, default=0, metavar="N", help="sensor noise seed")
     lau.add_argument("--noise-scale", type=float, default=1.0, metavar="X", help="multiplier on the sensor noise")
     lau.add_argument("--no-noise", action="store_true", help="ideal sensors")
+    lau.add_argument("--sequence", type=int, default=1, metavar="N",
+                     help="launch the clutch N times, the controller's adaptation carried over (default 1)")
+    lau.add_argument("--adaptation", metavar="A.toml", help="adaptation state to start from (written as "
+                                                             "DIR/adaptation.toml after the launches)")
     _param_args(lau)
     lau.set_defaults(func=_cmd_launch)
 
@@ -304,6 +314,8 @@ def build_parser() -> argparse.ArgumentParser:
     ver.add_argument("--seed", type=int, default=0, metavar="S")
     ver.add_argument("--workers", type=int, metavar="W", help="processes (default: all cores)")
     ver.add_argument("--ranges", metavar="R.toml", help="what varies and how (default: the shipped ranges file)")
+    ver.add_argument("--sequence", type=int, default=1, metavar="N",
+                     help="launches per sample, the adaptation carried over; judged on the last (default 1)")
     _controller_args(ver)
     _param_args(ver)
     ver.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -279,3 +279,21 @@ def nominal_response(d: design_.Design, cond: Conditions) -> metrics.Response:
         _NOMINAL[key] = metrics.response(res.signals["time"].to_numpy(), res.signals["T_r"].to_numpy(),
                                          res.signals["t_ref"].to_numpy(), c.t_request, res.summary["t_sync_s"])
     return _NOMINAL[key]
+
+
+def sequence(params: Params, controller: design_.Design | str, conditions: Conditions, n: int,
+             adaptation: Adaptation | None = None, nominal: metrics.Response | None = None) -> list[LaunchResult]:
+    """``n`` launches of one clutch, the controller's adaptation carried from each to the next.
+
+    Launch ``i`` runs with noise seed ``conditions.seed + i``; the last result's
+    ``adaptation`` is the state after the sequence.
+    """
+    if not 1 <= n <= 100:
+        raise WetclutchError(f"--sequence must be in 1..100 (got {n})")
+    out: list[LaunchResult] = []
+    learnt = adaptation
+    for i in range(n):
+        res = simulate(params, controller, replace(conditions, seed=conditions.seed + i), nominal, learnt)
+        learnt = res.adaptation
+        out.append(res)
+    return out

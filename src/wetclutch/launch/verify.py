@@ -30,6 +30,8 @@ from . import ranges as ranges_mod
 from .design import Design
 
 NOMINAL_LEVELS = np.array([25.0, 50.0, 100.0, 150.0, 200.0])
+#: a launch whose torque peaks above this multiple of the steady value slams
+SLAM_FACTOR = 1.5
 N_BINS = 4
 METRICS = ("steady_state_error_pct", "t95_s", "t95_settled_s", "overshoot_pct", "ripple_pct", "jerk_max", "creep_Nm", "standby_peak_Nm",
            "slip_energy_J", "t_sync_s")
@@ -54,6 +56,7 @@ class Context:
     ranges: list[ranges_mod.Range]
     profile: str = "step"
     replay_args: str = ""
+    sequence: int = 1
 
     def case(self, sample: Sample) -> tuple[Params, launch.Conditions]:
         plant, cond = ranges_mod.apply(self.ranges, sample.values, self.plant)
@@ -105,18 +108,28 @@ def _nominal_at(grid: tuple[np.ndarray, np.ndarray], t_ref: float) -> metrics.Re
 
 
 def run_sample(ctx: Context, sample: Sample, grid: tuple[np.ndarray, np.ndarray]) -> dict[str, Any]:
-    """Launch on one sample; its values, metrics and pass/fail (failures of the simulation recorded, not raised)."""
+    """Launches on one sample; its values, metrics and pass/fail (failures of the simulation recorded, not raised).
+
+    With ``ctx.sequence`` > 1 the sample is one clutch launched that many times, the controller's adaptation
+    carried from launch to launch (each launch its own noise seed); the metrics and requirements are those of
+    the last launch, ``first`` those of the first, ``slams`` counts launches whose torque peaked above
+    :data:`SLAM_FACTOR` times the request.
+    """
     plant, cond = ctx.case(sample)
+    seq = []
     try:
-        res = launch.simulate(plant, ctx.design, cond, nominal=_nominal_at(grid, cond.t_ref))
-        s = res.summary
+        seq = [r.summary for r in launch.sequence(plant, ctx.design, cond, ctx.sequence,
+                                                  nominal=_nominal_at(grid, cond.t_ref))]
+        s = seq[-1]
         figures = {k: s[k] for k in METRICS}
         req, error = s["requirements"], None
     except WetclutchError as e:
         figures, req, error = {}, {k: False for k in metrics.REQUIREMENTS}, str(e)
+    first = seq[0]["all_pass"] if seq else False
+    slams = sum(1 for x in seq if x["overshoot_pct"] is not None and x["overshoot_pct"] > 100.0 * (SLAM_FACTOR - 1))
     return {"index": sample.index, "corner": sample.corner, "seed": sample.seed, "values": sample.values,
-            "metrics": figures, "requirements": req, "all_pass": all(req.values()), "error": error,
-            "replay": ctx.replay(sample)}
+            "metrics": figures, "requirements": req, "all_pass": all(req.values()), "first_all_pass": first,
+            "slams": slams, "error": error, "replay": ctx.replay(sample)}
 
 
 _SHARED: tuple[Context, tuple[np.ndarray, np.ndarray]] | None = None
@@ -139,7 +152,7 @@ def check_options(n: int, seed: int, workers: int | None, samples_option: str = 
 
 def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 0, workers: int | None = None,
         ranges: list[ranges_mod.Range] | None = None, corners: bool = True, profile: str = "step",
-        progress: bool = True, replay_args: str = "") -> dict[str, Any]:
+        progress: bool = True, replay_args: str = "", sequence: int = 1) -> dict[str, Any]:
     """Verify ``design`` on ``n`` random samples (plus corners) around ``plant``; returns the ``verify.json`` content.
 
     Parameters
@@ -152,13 +165,16 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
         What varies (default: :data:`wetclutch.launch.ranges.DEFAULT_FILE`).
     replay_args
         Options every replay command carries (e.g. `` --param-file F --controller-file C``).
+    sequence
+        Launches per sample, the adaptation carried over (see :func:`run_sample`).
     """
     global _SHARED
     check_options(n, seed, workers)
     plant = plant if plant is not None else design.plant
     rs = ranges if ranges is not None else ranges_mod.load()
     ranges_mod.check(rs, plant)
-    ctx = Context(design, plant, rs, profile, replay_args)
+    ctx = Context(design, plant, rs, profile, replay_args + (f" --sequence {sequence}" if sequence > 1 else ""),
+                  sequence)
     workers = workers or os.cpu_count() or 1
     cases = samples(ctx, n, seed, corners)
     # the design's nominal responses, made once here and inherited by the forked workers
@@ -237,6 +253,9 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         "pass_rate_per_requirement": _rate(results),
         "pass_rate_random_samples": _rate(random_rows).get("all", float("nan")),
         "pass_rate_corners": _rate([r for r in results if r["corner"]]).get("all", float("nan")),
+        "sequence": ctx.sequence,
+        "pass_rate_first_launch": sum(r["first_all_pass"] for r in results) / total if total else float("nan"),
+        "slams": sum(r["slams"] for r in results),
         "bins": bins(results, ctx.ranges),
         "percentiles": pct,
         "worst": [{k: r[k] for k in ("index", "values", "metrics", "requirements", "replay")} for r in worst],
