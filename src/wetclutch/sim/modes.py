@@ -56,7 +56,10 @@ def _first_guess(t, x, net, ext, clm, grm):
         cap = max(capacity(j, t, False, x, net, ext), capacity(j, t_right, False, x, net, ext))
         s = slip(x, net, j)
         scale = max(1.0, abs(x[a]), abs(x[b]) if b >= 0 else 0.0)
-        if cap <= 0.0:
+        if net.cl_oneway[j] != 0:
+            # a one-way clutch is never free: b overruns a, or it is locked
+            clm[j] = -1 if s < -1e-8 * scale else LOCKED
+        elif cap <= 0.0:
             clm[j] = FREE
         elif abs(s) <= 1e-8 * scale:
             clm[j] = LOCKED
@@ -132,14 +135,24 @@ def _gear_modes(x, dx, aux, net, grm, released):
 @jit_inline
 def _release_worst(aux, net, clm, released):
     """Release the locked clutch most beyond its static capacity; True if one was. The test is the
-    event function itself, so a clutch kept locked starts with g >= 0."""
+    event function itself, so a clutch kept locked starts with g >= 0.
+
+    Of several locks on one body (a redundant set, whose torques are the least-norm
+    distribution), the one released carries its sliding torque from then on and the others
+    the rest: the set lets go only when no distribution keeps every lock within its limit.
+    A one-way clutch is limited only in the direction in which b overruns a."""
     nc = net.cl_a.shape[0]
     worst = -1
     worst_excess = 0.0
     for j in range(nc):
         if clm[j] == LOCKED:
-            lim = net.cl_peak[j] * aux[nc + j] * poly(net.cl_poly, j, 0.0)
-            if lim - abs(aux[j]) < 0.0:
+            if net.cl_oneway[j] != 0:
+                lim = net.cl_peak[j] * max(aux[nc + j], 0.0) * poly(net.cl_poly, j, 0.0)
+                over = -aux[j] - lim
+            else:
+                lim = net.cl_peak[j] * aux[nc + j] * poly(net.cl_poly, j, 0.0)
+                over = abs(aux[j]) - lim
+            if over > 0.0:
                 excess = abs(aux[j]) / lim if lim > 0.0 else np.inf
                 if excess > worst_excess:
                     worst_excess = excess
