@@ -13,7 +13,7 @@ import numpy as np
 
 from .compiled import jit, jit_inline
 from .rhs import capacity, hold_margins, poly, rhs, slip
-from .workspace import FREE, LOCKED, NO_MODE, STUCK, aux_offsets
+from .workspace import FREE, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets
 
 
 @jit_inline
@@ -197,12 +197,24 @@ def settle(t, net, ext, ws):
     _first_guess(t, x, net, ext, clm, grm)
     # a clutch or gear released in this settle must not be re-locked (no cycling)
     released[:] = 0
+    redundant = False
     for _ in range(4 * (nc + ng) + 4):
         _project(x, net, clm, grm)
         if not rhs(t, False, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm)):
             forget(ws.fact)
             return False
+        if ws.istate[IS_REDUNDANT] != 0:
+            redundant = True
+            # redundant locks: the clutches and brakes give way (carry their sliding torque) before
+            # a stuck gear, whose share of the least-norm distribution may lie outside its bounds
+            # while another distribution keeps it inside
+            if _release_worst(ws.aux, net, clm, released):
+                continue
         if _gear_modes(x, ws.dx, ws.aux, net, grm, released):
+            if redundant:
+                # a gear at its bound changes the shares: a clutch that gave way may hold again
+                for j in range(nc):
+                    released[j] = 0
             continue
         if _release_worst(ws.aux, net, clm, released):
             continue

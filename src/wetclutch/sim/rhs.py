@@ -25,7 +25,7 @@ from ..physics import actuator as act_
 from . import signals
 from .compiled import jit_inline
 from .linalg import lu_factor, lu_solve, svd_jacobi
-from .workspace import E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, IS_BAD_BODY, LOCKED, STUCK, aux_offsets
+from .workspace import E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, IS_BAD_BODY, IS_REDUNDANT, LOCKED, STUCK, aux_offsets
 
 
 @jit_inline
@@ -201,7 +201,9 @@ def _factor_constraints(net, clm, grm, A, piv, sol, G, n, istate):
         for c in range(n):
             scale = max(scale, abs(A[r, c]))
     if not lu_factor(A, piv, n, 1e-13 * scale):
+        istate[IS_REDUNDANT] = 1
         return _least_norm_constraints(net, clm, grm, A, G, n, istate)
+    istate[IS_REDUNDANT] = 0
     for c in range(nb):
         for r in range(n):
             sol[r] = 0.0
@@ -209,7 +211,23 @@ def _factor_constraints(net, clm, grm, A, piv, sol, G, n, istate):
         lu_solve(A, piv, sol, n)
         for r in range(n):
             G[r, c] = sol[r]
+    _exact_zeros(G, n, nb)
     return True
+
+
+@jit_inline
+def _exact_zeros(G, n, nb):
+    """Rounding-level entries of the solution operator to exact zeros, where the exact operator has
+    them: a body that locks hold at rest keeps its speed exactly, so no event function of an
+    element at standstill (a gear's power flow) creeps through zero by rounding."""
+    g_max = 0.0
+    for r in range(n):
+        for c in range(nb):
+            g_max = max(g_max, abs(G[r, c]))
+    for r in range(n):
+        for c in range(nb):
+            if abs(G[r, c]) <= 1e-13 * g_max:
+                G[r, c] = 0.0
 
 
 @jit_inline
@@ -247,7 +265,6 @@ def _least_norm_constraints(net, clm, grm, A, G, n, istate):
             if worst >= 0:
                 istate[IS_BAD_BODY] = worst
                 return False
-    g_max = 0.0
     for c in range(nb):
         for r in range(n):
             acc = 0.0
@@ -256,12 +273,7 @@ def _least_norm_constraints(net, clm, grm, A, G, n, istate):
                 if sj > tol:
                     acc += A[o_v + r, j] * A[o_u + c, j] / (sj * sj)
             G[r, c] = acc
-            g_max = max(g_max, abs(acc))
-    # exact zeros where the exact operator has them (held bodies do not creep by rounding)
-    for c in range(nb):
-        for r in range(n):
-            if abs(G[r, c]) <= 1e-13 * g_max:
-                G[r, c] = 0.0
+    _exact_zeros(G, n, nb)
     return True
 
 

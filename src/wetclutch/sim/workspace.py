@@ -53,7 +53,8 @@ IS_SWITCHES = 5  # clutch mode changes
 IS_N_LOG = 6  # mode changes logged (may exceed the log's length)
 IS_LAST_EVENT = 7  # event function of the last event
 IS_BAD_BODY = 8  # a body whose motion the network does not determine (-1: none)
-N_ISTATE = 9
+IS_REDUNDANT = 9  # 1: the current constraint factors are the least-norm ones of redundant locks
+N_ISTATE = 10
 
 EVENT_LOG = 4096  # rows of the mode-change log (time, clutch, new mode); later changes are counted, not logged
 
