@@ -35,6 +35,12 @@ def _param_args(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _scheduler_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run the launches on this dask.distributed scheduler, e.g. tcp://10.0.0.5:8786 "
+                        "(default: $DASK_SCHEDULER_ADDRESS; neither: local processes)")
+
+
 def _load_params(args: argparse.Namespace) -> params_mod.Params:
     overrides = dict(params_mod.parse_set(s) for s in args.sets)
     return params_mod.load(args.param_file, overrides)
@@ -131,7 +137,8 @@ def _cmd_verify(args: argparse.Namespace) -> None:
     from .launch import verify
     from .report import verify as verify_report
 
-    res = verify.run(args.samples, args.seed, args.workers, args.controller, progress=not args.quiet)
+    res = verify.run(args.samples, args.seed, args.workers, args.controller, progress=not args.quiet,
+                     scheduler=args.scheduler)
     verify_report.write(res, args.out)
     rate = res["pass_rate_per_requirement"]
     print(f"verify {args.controller}: {res['cases']} launches, all three requirements in {100 * res['pass_rate']:.1f} % "
@@ -143,7 +150,8 @@ def _cmd_report(args: argparse.Namespace) -> None:
     from .launch import campaign
     from .report import main as report
 
-    job = campaign.main_job(args.samples, args.baseline_samples, args.seed, args.workers, progress=not args.quiet)
+    job = campaign.main_job(args.samples, args.baseline_samples, args.seed, args.workers, progress=not args.quiet,
+                            scheduler=args.scheduler)
     s = report.write(job, args.out)
     print(f"report: launch controller meets all requirements in {100 * s['verify']['pass_rate']:.1f} % of "
           f"{s['verify']['cases']} launches, PI baseline in {100 * s['verify_baseline']['pass_rate']:.1f} % "
@@ -230,6 +238,7 @@ def build_parser() -> argparse.ArgumentParser:
     ver.add_argument("--seed", type=int, default=0, metavar="S")
     ver.add_argument("--workers", type=int, metavar="W", help="processes (default: all cores)")
     ver.add_argument("--controller", choices=("launch", "pi"), default="launch")
+    _scheduler_arg(ver)
     ver.add_argument("--quiet", action="store_true", help="no progress bar")
     ver.set_defaults(func=_cmd_verify)
 
@@ -239,6 +248,7 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--baseline-samples", type=int, default=200, metavar="N")
     rep.add_argument("--seed", type=int, default=0, metavar="S")
     rep.add_argument("--workers", type=int, metavar="W")
+    _scheduler_arg(rep)
     rep.add_argument("--quiet", action="store_true")
     rep.set_defaults(func=_cmd_report)
 

@@ -23,8 +23,9 @@ class MainJob:
 
 
 def main_job(samples: int = 1000, baseline_samples: int = 200, seed: int = 0, workers: int | None = None,
-             progress: bool = True) -> MainJob:
-    """Run the main job on the default rig (see :mod:`wetclutch.report.main` for what is written)."""
+             progress: bool = True, scheduler: str | None = None) -> MainJob:
+    """Run the main job on the default rig (see :mod:`wetclutch.report.main` for what is written); the two
+    verifications on the ``dask.distributed`` scheduler ``scheduler`` if one is given (see :func:`verify.run`)."""
     # refuse bad options before minutes of launches, not after
     verify.check_options(samples, seed, workers)
     verify.check_options(baseline_samples, seed, workers, "--baseline-samples")
@@ -34,6 +35,6 @@ def main_job(samples: int = 1000, baseline_samples: int = 200, seed: int = 0, wo
         for t_ref in NOMINAL_REQUESTS:
             cond = loop.Conditions(t_ref=t_ref, oil_temp_C=temp)
             launches.append((loop.simulate(p, "launch", cond), loop.simulate(p, "pi", cond)))
-    ver = verify.run(samples, seed, workers, "launch", progress=progress)
-    base = verify.run(baseline_samples, seed, workers, "pi", progress=progress)
+    ver = verify.run(samples, seed, workers, "launch", progress=progress, scheduler=scheduler)
+    base = verify.run(baseline_samples, seed, workers, "pi", progress=progress, scheduler=scheduler)
     return MainJob(launches, ver, base)

@@ -11,6 +11,7 @@ own noise seed, so a run is deterministic and each sample can be replayed with
 
 from __future__ import annotations
 
+import functools
 import itertools
 import os
 from concurrent.futures import ProcessPoolExecutor
@@ -21,6 +22,7 @@ import numpy as np
 
 from ..errors import WetclutchError
 from ..params import Params
+from . import distributed
 from . import loop as launch
 from . import metrics
 from .design import CONTROLLERS
@@ -151,6 +153,11 @@ def _worker(args: tuple[Sample, str, str, Any]) -> dict[str, Any]:
     return run_sample(args[0], args[1], _GRID, args[2], args[3])
 
 
+def _warm() -> None:
+    """Compile the closed loop on this process, or load it from the numba cache (a sweep's workers)."""
+    launch.simulate(Params(), "launch", launch.Conditions())
+
+
 def check_options(n: int, seed: int, workers: int | None, samples_option: str = "--samples") -> None:
     """Refuse a bad sample count, seed or worker count (one-line errors naming the option)."""
     if n < 0:
@@ -162,11 +169,13 @@ def check_options(n: int, seed: int, workers: int | None, samples_option: str = 
 
 
 def run(n: int = 1000, seed: int = 0, workers: int | None = None, controller: str = "launch", profile: str = "step",
-        corners: bool = True, progress: bool = True, gains: Any = None) -> dict[str, Any]:
+        corners: bool = True, progress: bool = True, gains: Any = None, scheduler: str | None = None) -> dict[str, Any]:
     """Verify ``controller`` on ``n`` random samples (plus corners); returns the ``verify.json`` content.
 
     ``gains`` replaces the controller's default settings (a :class:`~wetclutch.launch.design.LaunchGains`
     or :class:`~wetclutch.launch.design.PIGains`), in the samples and in the nominal launches alike.
+    ``scheduler``: the address of a ``dask.distributed`` scheduler to run the samples on (default
+    ``$DASK_SCHEDULER_ADDRESS``; neither: local processes); the result is the same bit for bit.
     """
     global _GRID
     check_options(n, seed, workers)
@@ -185,7 +194,12 @@ def run(n: int = 1000, seed: int = 0, workers: int | None = None, controller: st
             TimeElapsedColumn(), TimeRemainingColumn())
     with Progress(*cols, disable=not progress, transient=False) as bar:
         task = bar.add_task("verify", total=len(jobs), ctrl=controller)
-        if workers == 1:
+        address = distributed.scheduler_address(scheduler)
+        if address is not None:
+            one = functools.partial(run_sample, controller=controller, grid=_GRID, profile=profile, gains=gains)
+            results = distributed.map_batches(one, cases, address, warm=_warm,
+                                              on_batch=lambda k: bar.advance(task, k))
+        elif workers == 1:
             for j in jobs:
                 results.append(_worker(j))
                 bar.advance(task)
