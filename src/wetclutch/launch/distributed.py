@@ -74,7 +74,7 @@ def map_batches(fn: Callable[[Any], Any], items: Sequence[Any], scheduler: str, 
     batch_size
         Items per task; default: the items spread over :data:`BATCHES_PER_THREAD` tasks per worker thread.
     on_batch
-        Called with the number of items of each batch as it completes (progress).
+        Called with the number of items of each batch as its results arrive, in order (progress).
     """
     if not items:
         return []
@@ -85,16 +85,12 @@ def map_batches(fn: Callable[[Any], Any], items: Sequence[Any], scheduler: str, 
         threads = max(1, sum(client.nthreads().values()))
         n_batches = math.ceil(len(items) / batch_size) if batch_size else threads * BATCHES_PER_THREAD
         batches = split(items, n_batches)
-        from distributed import as_completed
-
         futures = client.map(_apply, [fn] * len(batches), batches, pure=False)
-        index = {f.key: k for k, f in enumerate(futures)}
-        results: list[list[Any] | None] = [None] * len(batches)
-        for fut in as_completed(futures):
-            k = index[fut.key]
-            results[k] = fut.result()
+        results = []
+        for batch, fut in zip(batches, futures):
+            results.append(fut.result())
             if on_batch is not None:
-                on_batch(len(batches[k]))
-        return [r for batch in results for r in batch]  # type: ignore[union-attr]
+                on_batch(len(batch))
+        return [r for batch in results for r in batch]
     finally:
         client.close()
