@@ -104,9 +104,10 @@ def test_launch_writes_signals_summary_plot(tmp_path):
     assert list(sig.columns) == ["time", "p_clutch", "T_r", "omega_p", "omega_1", "omega_r", "omega_s", "oil_temp",
                                  "t_ref", "u"]
     s = json.loads((out / "summary.json").read_text())
-    for key in ("steady_state_error_pct", "t95_s", "overshoot_pct", "jerk_max", "slip_energy_J", "t_sync_s"):
+    for key in ("steady_state_error_pct", "t95_s", "t95_settled_s", "overshoot_pct", "ripple_pct", "creep_Nm",
+                "jerk_max", "slip_energy_J", "t_sync_s"):
         assert key in s
-    assert set(s["requirements"]) == {"steady_state_error", "response_time", "robustness"}
+    assert set(s["requirements"]) == {"steady_state_error", "response_time", "robustness", "standby"}
     assert s["params"]["driveline"]["ratio"] == 0.5
     assert (out / "plot.png").stat().st_size > 10_000
 
@@ -125,6 +126,11 @@ def test_launch_writes_signals_summary_plot(tmp_path):
         (["launch", "--seed", "-1"], "--seed"),
         (["verify", "--seed", "-1"], "--seed"),
         (["report", "--seed", "-1"], "--seed"),
+        (["launch", "--controller-file", "nonexistent.toml"], "nonexistent.toml"),
+        (["verify", "--ranges", "nonexistent.toml"], "nonexistent.toml"),
+        (["report", "--baseline-file", "nonexistent.toml"], "nonexistent.toml"),
+        (["design", "--set", "hydraulics.A_p=-1"], "hydraulics.A_p"),
+        (["design", "--controller", "pi"], "invalid choice"),
         (["rig", "step", "--seed", "-1"], "--seed"),
     ],
 )
@@ -144,3 +150,25 @@ def test_write_error_inside_the_output_is_a_one_line_error(tmp_path):
             (d / "part.csv").write_text("time\n")
             raise OSError(28, "No space left on device")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_design_writes_loadable_controller_files_and_their_account(tmp_path, cli_refuses):
+    out = tmp_path / "design"
+    plant = tmp_path / "plant.toml"
+    plant.write_text("[driveline]\nratio = 0.7\n")
+    assert main(["design", "--out", str(out), "--param-file", str(plant), "--set", "hydraulics.p_prestress=60000"]) == 0
+    md = (out / "design.md").read_text()
+    assert "| ratio | 0.7 | - |" in md and "plant (parameter file): driveline.ratio" in md
+    assert "--set" in md.split("| p_kiss |")[1].splitlines()[0]  # the prestress came from --set
+    assert "SIMC" in md  # the baseline's gains and their rule
+    # the launch runs the file's design; a baseline file where a launch controller is needed is refused
+    assert main(["launch", "--out", str(tmp_path / "l"), "--controller-file", str(out / "controller.toml"),
+                 "--t-ref", "80", "--oil-temp", "85"]) == 0
+    cli_refuses(["report", "--controller-file", str(out / "baseline.toml")], "a launch controller is needed",
+                tmp_path / "never")
+    bad = tmp_path / "bad.toml"
+    bad.write_text((out / "controller.toml").read_text().replace('unit = "1/s"', 'unit = "1/min"', 1))
+    cli_refuses(["launch", "--controller-file", str(bad)], "settings.ki_t.unit", tmp_path / "never2")
+    ranges = tmp_path / "r.toml"
+    ranges.write_text("[x]\ntarget = 'driveline.warp'\nlow = 0\nhigh = 1\n")
+    cli_refuses(["verify", "--ranges", str(ranges)], "[x].target", tmp_path / "never3")

@@ -8,7 +8,9 @@ import pytest
 
 from wetclutch import cli
 from wetclutch.errors import WetclutchError
+from wetclutch.launch import design as designs
 from wetclutch.launch import distributed, verify
+from wetclutch.params import Params
 
 
 @pytest.fixture(scope="module")
@@ -44,16 +46,18 @@ def test_map_batches_returns_results_in_item_order(cluster):
 
 def test_verify_on_the_cluster_equals_the_local_run(cluster):
     # a few launches (corners off): the same verify.json bit for bit, local processes or the cluster
-    local = verify.run(3, seed=7, workers=1, corners=False, progress=False)
-    remote = verify.run(3, seed=7, corners=False, progress=False, scheduler=cluster.scheduler_address)
+    d = designs.cached(Params())
+    local = verify.run(d, n=3, seed=7, workers=1, corners=False, progress=False)
+    remote = verify.run(d, n=3, seed=7, corners=False, progress=False, scheduler=cluster.scheduler_address)
     assert json.dumps(remote, sort_keys=True) == json.dumps(local, sort_keys=True)
     assert remote["cases"] == 3
 
 
 def test_verify_honours_the_environment(cluster, monkeypatch):
     monkeypatch.setenv(distributed.ENV_SCHEDULER, cluster.scheduler_address)
-    local = verify.run(1, seed=11, workers=1, corners=False, progress=False, scheduler="")
-    remote = verify.run(1, seed=11, corners=False, progress=False)
+    d = designs.cached(Params())
+    local = verify.run(d, n=1, seed=11, workers=1, corners=False, progress=False, scheduler="")
+    remote = verify.run(d, n=1, seed=11, corners=False, progress=False)
     assert json.dumps(remote, sort_keys=True) == json.dumps(local, sort_keys=True)
 
 

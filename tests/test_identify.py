@@ -392,6 +392,31 @@ def test_cli_identify_writes_outputs_and_a_loadable_param_file(rig_data, tmp_pat
         assert (out / png).stat().st_size > 0
     sim = _cli("simulate", "engage", "--param-file", str(out / "params.toml"), "--out", str(tmp_path / "sim"))
     assert sim.returncode == 0, sim.stderr
+    # what was identified and what is the prior, for the design step's account of its settings
+    assert data["parameters"]["driveline.ratio"] == "identified"
+    assert data["parameters"]["hydraulics.x_contact"] == "identified"
+    assert data["parameters"]["valve.m_stem"] == "prior"
+
+
+def test_the_chain_from_rig_files_to_a_verified_design(rig_data, tmp_path):
+    """Rig files -> identify -> design -> verify on that plant, as a user with their own clutch runs it."""
+    _, root, _ = rig_data
+    out = tmp_path / "id"
+    assert _cli("identify", *[str(root / n / "measured.mf4") for n in RUNS], "--out", str(out)).returncode == 0
+    des = _cli("design", "--param-file", str(out / "params.toml"), "--out", str(tmp_path / "design"))
+    assert des.returncode == 0, des.stderr
+    md = (tmp_path / "design" / "design.md").read_text()
+    assert "plant (identified): driveline.ratio" in md
+    ctrl = tmp_path / "design" / "controller.toml"
+    assert "| ratio | 0.6" in md  # the identified ratio of the true rig
+    small = tmp_path / "r.toml"
+    small.write_text("[request]\ntarget = 't_ref'\nlow = 60.0\nhigh = 120.0\ncorner = true\n")
+    ver = _cli("verify", "--param-file", str(out / "params.toml"), "--controller-file", str(ctrl), "--ranges", str(small),
+               "--samples", "0", "--workers", "1", "--quiet", "--out", str(tmp_path / "verify"))
+    assert ver.returncode == 0, ver.stderr
+    res = json.loads((tmp_path / "verify" / "verify.json").read_text())
+    assert res["cases"] == 2 and all(r["metrics"] for r in res["results"])
+    assert "--controller-file" in res["results"][0]["replay"]
 
 
 def test_cli_identify_bad_input_is_one_line_and_writes_nothing(rig_data, tmp_path, cli_refuses):

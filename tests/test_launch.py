@@ -19,17 +19,37 @@ def nominal():
 
 @pytest.mark.parametrize("temp", [41.0, 85.0])
 @pytest.mark.parametrize("t_ref", [50.0, 150.0])
-def test_nominal_launches_meet_the_requirements(temp, t_ref):
+def test_nominal_launches_reach_the_request(temp, t_ref):
     res = launch.simulate(Params(), "launch", launch.Conditions(t_ref=t_ref, oil_temp_C=temp))
     s = res.summary
-    assert s["requirements"] == {"steady_state_error": True, "response_time": True, "robustness": True}, s
+    assert s["requirements"]["steady_state_error"], s
+    assert s["t95_s"] < metrics.REQ_T95_S, s
+    assert s["creep_Nm"] <= metrics.REQ_CREEP_NM, s
     assert s["t_sync_s"] is not None and s["t_sync_s"] > 1.5
 
 
-def test_the_design_beats_the_plain_pi_baseline(nominal):
-    base = launch.simulate(Params(), "pi", launch.Conditions(t_ref=100.0, oil_temp_C=85.0))
-    assert base.summary["overshoot_pct"] > 3 * nominal.summary["overshoot_pct"]
-    assert base.summary["t95_s"] > nominal.summary["t95_s"]
+def test_the_fair_baseline_fills_holds_and_meets_its_tuning_target():
+    base = launch.simulate(Params(), "baseline", launch.Conditions(t_ref=100.0, oil_temp_C=85.0))
+    s = base.summary
+    assert s["controller"] == "baseline"
+    # the SIMC rule aims at a 95 % time of 0.15 s; a plain PI without fill would need the dead time of the fill on top
+    assert s["t95_settled_s"] < metrics.REQ_T95_S and s["overshoot_pct"] < 10.0, s
+    assert s["creep_Nm"] <= metrics.REQ_CREEP_NM
+    sig = base.signals
+    # the timed fill pulse: full input from the start, for the design's fill time at 85 C
+    d = designs.cached(Params(), "baseline")
+    pulse = sig.time[(sig.u >= 4.999) & (sig.time < 1.0)].max()
+    assert pulse == pytest.approx(float(np.interp(85.0, d.temps_C, d.fill_s)), abs=2e-3)
+
+
+def test_lock_up_is_found_for_a_small_request_that_locks_late():
+    # 25 N m against the road load: synchronisation some 9 s after the request
+    res = launch.simulate(Params(), "launch", launch.Conditions(t_ref=25.0, oil_temp_C=85.0))
+    tr = res.truth
+    locked = tr.locked.to_numpy().astype(bool)
+    first_locked_for_good = tr.time[np.flatnonzero(~locked)[-1] + 1]
+    assert res.summary["t_sync_s"] is not None
+    assert res.summary["t_sync_s"] == pytest.approx(first_locked_for_good, abs=1.5e-3)
 
 
 def test_signals_carry_the_rig_channels_request_and_input(nominal):
@@ -112,5 +132,5 @@ def test_controller_refuses_a_friction_law_it_would_truncate():
     design = Params()
     design.friction.mu_slip_poly = [1e-9, -1.7e-6, 2.7e-4, 2.6e-2]
     with pytest.raises(WetclutchError, match="friction.mu_slip_poly"):
-        designs.record("launch", design)
+        designs.design(design, "launch")
 

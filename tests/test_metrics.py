@@ -100,3 +100,49 @@ def test_no_relative_error_without_a_request_in_the_window():
     req = np.where(t < 1.2, 50.0, 0.0)  # a request dropped before the steady window
     r = metrics.response(t, np.zeros_like(t), req, 1.0, None)
     assert np.isnan(r.steady_state_error_pct) and np.isnan(r.t95_s)
+
+
+def _hump(t, level, hump):
+    """A response that rises to ``hump`` x level at 30 ms, dips to 80 % at 50 ms and rises again to level at 70 ms."""
+    s = t - T_REQ
+    return np.where(s < 0, 0.0, level * np.interp(s, [0.0, 0.03, 0.05, 0.07, 10.0], [0.0, hump, 0.8, 1.0, 1.0]))
+
+
+def test_settled_t95_is_stable_where_the_first_crossing_jumps():
+    # the steady value moves by 1 N m: the hump ends on either side of 95 %
+    t = _grid()
+    ref = np.where(t >= T_REQ, 100.0, 0.0)
+    lo = metrics.response(t, _hump(t, 100.0, 0.955), ref, T_REQ, None)
+    hi = metrics.response(t, _hump(t, 101.0, 0.945), ref, T_REQ, None)
+    assert lo.t95_s == pytest.approx(0.03, abs=2 * DT) and hi.t95_s == pytest.approx(0.067, abs=2 * DT)
+    # the last entry into the band: where the second rise crosses 95 % (smoothing lags it a few ms)
+    assert lo.t95_settled_s == pytest.approx(hi.t95_settled_s, abs=2 * DT)
+    assert 0.065 <= lo.t95_settled_s <= 0.075
+
+
+def test_ripple_of_a_sustained_oscillation_fails_robustness():
+    t = _grid()
+    ref = np.where(t >= T_REQ, 100.0, 0.0)
+    f, amp = 18.0, 40.0  # Hz, N m: the mean is right, the slip phase shakes
+    y = _first_order(t, 100.0, 0.02) + np.where(t >= T_REQ + 0.2, amp * np.sin(2 * np.pi * f * t), 0.0)
+    r = metrics.response(t, y, ref, T_REQ, None)
+    smooth_gain = abs(np.sinc(f * metrics.SMOOTH))  # the trailing mean over SMOOTH attenuates the sine
+    assert r.steady_state_error_pct < 1.0
+    assert r.ripple_pct == pytest.approx(amp * smooth_gain / np.sqrt(2.0), rel=0.03)
+    calm = metrics.response(t, _first_order(t, 100.0, 0.02), ref, T_REQ, None)
+    assert metrics.requirements(calm, calm)["robustness"]
+    assert not metrics.requirements(r, calm)["robustness"]
+
+
+def test_creep_is_the_standby_torque_before_the_request():
+    t = _grid()
+    ref = np.where(t >= T_REQ, 100.0, 0.0)
+    # a contact jolt of 30 N m for 50 ms at 0.4 s, then 6 N m of creep until the request
+    before = np.where((t >= 0.4) & (t < 0.45), 30.0, np.where(t >= 0.45, 6.0, 0.0))
+    y = np.where(t >= T_REQ, _first_order(t, 100.0, 0.02), before)
+    r = metrics.response(t, y, ref, T_REQ, None)
+    assert r.creep_Nm == pytest.approx(6.0)
+    assert r.standby_peak_Nm == pytest.approx((30.0 * 0.05 + 6.0 * 0.05) / metrics.PEAK_WINDOW, rel=0.02)
+    assert metrics.requirements(r, r)["standby"]
+    y2 = np.where(t < T_REQ, y + 5.0, y)
+    assert not metrics.requirements(metrics.response(t, y2, ref, T_REQ, None), r)["standby"]

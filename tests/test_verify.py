@@ -1,54 +1,90 @@
-"""Verification runs: sampling, determinism, replay."""
+"""Verification runs: sampling from ranges, design mismatch, determinism, replay, per-bin rates."""
 
+import json
 import shlex
 
 import numpy as np
 import pytest
 
 from wetclutch import cli
-from wetclutch.launch import verify
 from wetclutch.errors import WetclutchError
+from wetclutch.launch import design as designs
+from wetclutch.launch import metrics, ranges, verify
+from wetclutch.params import Params, load
+
+SMALL = {"kiss": {"target": "hydraulics.p_prestress", "how": "offset", "low": -0.05e5, "high": 0.05e5, "corner": True},
+         "ratio": {"target": "driveline.ratio", "low": 0.45, "high": 0.6},
+         "temp": {"target": "oil_temp_C", "low": 60.0, "high": 85.0},
+         "request": {"target": "t_ref", "low": 60.0, "high": 120.0}}
 
 
 def test_samples_cover_the_ranges_and_are_deterministic():
-    a = verify.samples(200, seed=7)
-    b = verify.samples(200, seed=7)
+    rs = ranges.load()
+    ctx = verify.Context(designs.cached(Params()), Params(), rs)
+    a = verify.samples(ctx, 200, seed=7)
+    b = verify.samples(ctx, 200, seed=7)
     assert [s.values for s in a] == [s.values for s in b]
-    assert len(a) == 200 + 2 ** len(verify.CORNERS)
+    assert len(a) == 200 + 2 ** sum(r.corner for r in rs)
     rnd = [s for s in a if not s.corner]
-    for name, (_, lo, hi, _) in verify.RANGES.items():
-        v = np.array([s.values[name] for s in rnd])
-        assert lo <= v.min() and v.max() <= hi
-        assert v.max() - v.min() > 0.8 * (hi - lo)  # spread over the range
-    assert verify.samples(5, seed=8)[-1].values != a[-1].values
+    for r in rs:
+        v = np.array([s.values[r.name] for s in rnd])
+        assert r.low <= v.min() and v.max() <= r.high
+        assert v.max() - v.min() > 0.8 * (r.high - r.low)  # spread over the range
+    assert verify.samples(ctx, 5, seed=8)[-1].values != a[-1].values
 
 
-def test_sample_parameters_scale_or_set():
-    s = verify.samples(1, seed=1)[-1]
-    p = s.params()
-    assert p.friction.mu_scale == s.values["friction.mu_scale"]
-    assert p.driveline.k_a == pytest.approx(480.0 * s.values["driveline.k_a"])
+def test_a_design_runs_on_another_plant():
+    # designed on the defaults, run on a plant whose kiss point lies 0.2 bar higher: the mismatch is expressible
+    # and the verification's plant is the other one
+    other = load(overrides={"hydraulics.p_prestress": 0.7e5})
+    d = designs.cached(Params(), "launch")
+    rs = ranges.parse(SMALL)
+    ctx = verify.Context(d, other, rs)
+    s = verify.samples(ctx, 1, seed=1)[-1]
+    plant, cond = ctx.case(s)
+    assert plant.hydraulics.p_prestress == pytest.approx(0.7e5 + s.values["kiss"])
+    assert d.settings["p_kiss"] == pytest.approx(0.70033e5, rel=1e-4)  # the design keeps its own kiss point
 
 
-def test_small_run_is_deterministic_and_replayable(tmp_path):
-    a = verify.run(2, seed=5, workers=1, corners=False, progress=False)
-    b = verify.run(2, seed=5, workers=1, corners=False, progress=False)
-    assert [r["metrics"] for r in a["results"]] == [r["metrics"] for r in b["results"]]
-    assert set(a) >= {"pass_rate", "pass_rate_per_requirement", "results", "percentiles", "worst"}
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory):
+    root = tmp_path_factory.mktemp("verify")
+    (root / "r.toml").write_text("\n".join(
+        f"[{k}]\n" + "\n".join(f"{a} = {json.dumps(b)}" for a, b in v.items()) for k, v in SMALL.items()) + "\n")
+    out = root / "out"
+    assert cli.main(["verify", "--out", str(out), "--samples", "3", "--seed", "5", "--workers", "1", "--quiet",
+                     "--ranges", str(root / "r.toml")]) == 0
+    return json.loads((out / "verify.json").read_text()), root
+
+
+def test_small_run_is_deterministic_and_replayable(small_run, tmp_path):
+    res, root = small_run
+    again = verify.run(designs.cached(Params()), Params(), 3, seed=5, workers=1, ranges=ranges.load(root / "r.toml"),
+                       progress=False)
+    assert [r["metrics"] for r in res["results"]] == [r["metrics"] for r in again["results"]]
+    assert res["cases"] == 3 + 2
     # the replay command reproduces the sample's launch
-    r = a["results"][0]
+    r = res["results"][-1]
     argv = shlex.split(r["replay"])[1:]
     argv[argv.index("--out") + 1] = str(tmp_path / "replay")
     assert cli.main(argv) == 0
-    import json
-
     summary = json.loads((tmp_path / "replay" / "summary.json").read_text())
-    for key in ("t95_s", "steady_state_error_pct", "overshoot_pct"):
+    for key in ("t95_s", "t95_settled_s", "steady_state_error_pct", "overshoot_pct", "creep_Nm"):
         assert summary[key] == pytest.approx(r["metrics"][key], rel=1e-9)
 
 
+def test_bins_partition_the_random_samples(small_run):
+    res, _ = small_run
+    assert set(res["bins"]) == set(SMALL)
+    for name, table in res["bins"].items():
+        assert sum(b["samples"] for b in table) == res["samples"]
+        assert table[0]["low"] == SMALL[name]["low"] and table[-1]["high"] == SMALL[name]["high"]
+    assert set(res["pass_rate_per_requirement"]) == set(metrics.REQUIREMENTS) | {"all"}
+
+
 def test_bad_options():
+    d = designs.cached(Params())
     with pytest.raises(WetclutchError, match="--samples"):
-        verify.run(-1, progress=False)
+        verify.run(d, n=-1, progress=False)
     with pytest.raises(WetclutchError, match="--workers"):
-        verify.run(1, workers=0, progress=False)
+        verify.run(d, n=1, workers=0, progress=False)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import NoReturn
 
 from . import params as params_mod
@@ -117,45 +118,109 @@ def _cmd_calibration(args: argparse.Namespace) -> None:
     print(f"{sum(f.passed for f in figs)} of {len(figs)} figures within tolerance -> {args.out}/report.md")
 
 
+def _controller_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--controller", choices=("launch", "baseline"),
+                   help="controller kind: the design (launch, default) or the fair baseline; designed on the plant "
+                        "unless --controller-file is given")
+    p.add_argument("--controller-file", metavar="C.toml",
+                   help="a controller file from 'wetclutch design' (designed on any plant)")
+
+
+def _plant(args: argparse.Namespace) -> tuple[params_mod.Params, dict[str, str]]:
+    """The plant of the command line and how each of its parameters was obtained."""
+    from .launch.design import plant_origin
+
+    overrides = dict(params_mod.parse_set(s) for s in args.sets)
+    return params_mod.load(args.param_file, overrides), plant_origin(args.param_file, overrides)
+
+
+def _design(args: argparse.Namespace, plant: params_mod.Params, origin: dict[str, str], kind: str | None = None):
+    """The controller to run: the file's, or ``kind`` (default ``--controller``) designed on ``plant``."""
+    from .launch import design, settings
+
+    if getattr(args, "controller_file", None) and kind is None:
+        return settings.load(args.controller_file, args.controller)
+    return design.design(plant, kind or args.controller or "launch", origin)
+
+
+def _replay_args(args: argparse.Namespace, controller_file: str) -> str:
+    """Options that make ``wetclutch launch`` replay a sample: the plant's file and the controller file written
+    beside the results (the design, not one made anew on the sample's plant)."""
+    out = f" --param-file {args.param_file}" if args.param_file else ""
+    return out + f" --controller-file {Path(args.out) / controller_file}"
+
+
+def _cmd_design(args: argparse.Namespace) -> None:
+    from .report import design as design_report
+
+    plant, origin = _plant(args)
+    kinds = [args.controller] if args.controller else ["launch", "baseline"]
+    designs = [_design(args, plant, origin, k) for k in kinds]
+    design_report.write(designs, args.out)
+    names = ["controller.toml"] + [f"{d.kind}.toml" for d in designs[1:]]
+    print(f"design: {', '.join(d.kind for d in designs)} for the plant (kiss point "
+          f"{designs[0].settings['p_kiss'] / 1e5:.3f} bar) -> {args.out}/{', '.join(names)}, design.md")
+
+
 def _cmd_launch(args: argparse.Namespace) -> None:
     from .launch import loop as launch
     from .report import launch as launch_report
 
-    p = _load_params(args)
+    p, origin = _plant(args)
+    d = _design(args, p, origin)
     cond = launch.Conditions(t_ref=args.t_ref, profile=args.profile, oil_temp_C=args.oil_temp, seed=args.seed,
                              noise=not args.no_noise, noise_scale=args.noise_scale)
-    res = launch.simulate(p, args.controller, cond)
+    res = launch.simulate(p, d, cond)
     launch_report.write(res, args.out, p)
     s = res.summary
     req = ", ".join(f"{k} {'pass' if v else 'FAIL'}" for k, v in s["requirements"].items())
     fmt = lambda v, f: "-" if v is None else format(v, f)  # noqa: E731
-    print(f"launch {args.controller}: ess {fmt(s['steady_state_error_pct'], '.2f')} %, t95 {fmt(s['t95_s'], '.3f')} s, "
-          f"overshoot {fmt(s['overshoot_pct'], '.1f')} %, t_sync {fmt(s['t_sync_s'], '.2f')} s; {req} -> {args.out}")
+    print(f"launch {d.kind}: ess {fmt(s['steady_state_error_pct'], '.2f')} %, t95 {fmt(s['t95_s'], '.3f')} s "
+          f"(settled {fmt(s['t95_settled_s'], '.3f')} s), overshoot {fmt(s['overshoot_pct'], '.1f')} %, "
+          f"creep {fmt(s['creep_Nm'], '.1f')} N m, t_sync {fmt(s['t_sync_s'], '.2f')} s; {req} -> {args.out}")
+
+
+def _rates(res: dict) -> str:
+    from .launch.metrics import REQUIREMENTS
+
+    rate = res["pass_rate_per_requirement"]
+    return ", ".join(f"{k} {100 * rate[k]:.1f} %" for k in REQUIREMENTS)
 
 
 def _cmd_verify(args: argparse.Namespace) -> None:
-    from .launch import verify
+    from .launch import ranges, verify
     from .report import verify as verify_report
 
-    res = verify.run(args.samples, args.seed, args.workers, args.controller, progress=not args.quiet,
-                     scheduler=args.scheduler)
-    verify_report.write(res, args.out)
-    rate = res["pass_rate_per_requirement"]
-    print(f"verify {args.controller}: {res['cases']} launches, all three requirements in {100 * res['pass_rate']:.1f} % "
-          f"(ess {100 * rate['steady_state_error']:.1f} %, t95 {100 * rate['response_time']:.1f} %, "
-          f"robust {100 * rate['robustness']:.1f} %) -> {args.out}")
+    verify.check_options(args.samples, args.seed, args.workers)
+    p, origin = _plant(args)
+    rs = ranges.load(args.ranges)
+    d = _design(args, p, origin)
+    res = verify.run(d, p, args.samples, args.seed, args.workers, rs, progress=not args.quiet,
+                     replay_args=_replay_args(args, "controller.toml"), scheduler=args.scheduler)
+    verify_report.write(res, args.out, d)
+    print(f"verify {d.kind}: {res['cases']} launches, all requirements in {100 * res['pass_rate']:.1f} % "
+          f"({_rates(res)}) -> {args.out}")
 
 
 def _cmd_report(args: argparse.Namespace) -> None:
-    from .launch import campaign
+    from .launch import campaign, ranges, settings, verify
     from .report import main as report
 
-    job = campaign.main_job(args.samples, args.baseline_samples, args.seed, args.workers, progress=not args.quiet,
-                            scheduler=args.scheduler)
+    verify.check_options(args.samples, args.seed, args.workers)
+    verify.check_options(args.baseline_samples, args.seed, args.workers, "--baseline-samples")
+    p, origin = _plant(args)
+    rs = ranges.load(args.ranges)
+    d = settings.load(args.controller_file, "launch") if args.controller_file else _design(args, p, origin, "launch")
+    b = (settings.load(args.baseline_file, "baseline") if args.baseline_file
+         else _design(args, p, origin, "baseline"))
+    job = campaign.main_job(p, d, b, rs, args.samples, args.baseline_samples, args.seed, args.workers,
+                            progress=not args.quiet, replay_args=_replay_args(args, "controller.toml"),
+                            baseline_replay_args=_replay_args(args, "baseline.toml"), scheduler=args.scheduler)
     s = report.write(job, args.out)
+    same = s["same_samples"]
     print(f"report: launch controller meets all requirements in {100 * s['verify']['pass_rate']:.1f} % of "
-          f"{s['verify']['cases']} launches, PI baseline in {100 * s['verify_baseline']['pass_rate']:.1f} % "
-          f"-> {args.out}/report.md")
+          f"{s['verify']['cases']} launches; on the same {same['samples']}: design {100 * same['design']:.1f} %, "
+          f"baseline {100 * same['baseline']:.1f} % -> {args.out}/report.md")
 
 
 def _cmd_identify(args: argparse.Namespace) -> None:
@@ -220,9 +285,16 @@ def build_parser() -> argparse.ArgumentParser:
     _param_args(cal)
     cal.set_defaults(func=_cmd_calibration)
 
+    des = sub.add_parser("design", help="design the launch controller (and the fair baseline) for a plant: "
+                                        "controller.toml, baseline.toml, design.md")
+    des.add_argument("--out", required=True, metavar="DIR")
+    des.add_argument("--controller", choices=("launch", "baseline"), help="design only this kind (default: both)")
+    _param_args(des)
+    des.set_defaults(func=_cmd_design)
+
     lau = sub.add_parser("launch", help="a controlled launch from standstill: signals.csv, summary.json, plot.png")
     lau.add_argument("--out", required=True, metavar="DIR")
-    lau.add_argument("--controller", choices=("launch", "pi"), default="launch", help="design (launch) or PI baseline")
+    _controller_args(lau)
     lau.add_argument("--t-ref", type=float, default=100.0, metavar="NM", help="requested axle torque T_r, N m (default 100)")
     lau.add_argument("--profile", default="step", metavar="step|ramp|FILE", help="request profile or CSV (time, t_ref)")
     lau.add_argument("--oil-temp", type=float, metavar="C", help="oil temperature, C (default rig.oil_temp_C)")
@@ -234,21 +306,28 @@ def build_parser() -> argparse.ArgumentParser:
 
     ver = sub.add_parser("verify", help="Monte Carlo and corner-case verification of a launch controller")
     ver.add_argument("--out", required=True, metavar="DIR")
-    ver.add_argument("--samples", type=int, default=1000, metavar="N", help="random samples (default 1000; plus 16 corners)")
+    ver.add_argument("--samples", type=int, default=1000, metavar="N", help="random samples (default 1000; plus corners)")
     ver.add_argument("--seed", type=int, default=0, metavar="S")
     ver.add_argument("--workers", type=int, metavar="W", help="processes (default: all cores)")
-    ver.add_argument("--controller", choices=("launch", "pi"), default="launch")
     _scheduler_arg(ver)
+    ver.add_argument("--ranges", metavar="R.toml", help="what varies and how (default: the shipped ranges file)")
+    _controller_args(ver)
+    _param_args(ver)
     ver.add_argument("--quiet", action="store_true", help="no progress bar")
     ver.set_defaults(func=_cmd_verify)
 
-    rep = sub.add_parser("report", help="the main job: nominal launches, verification of design and baseline, report.md")
+    rep = sub.add_parser("report", help="the main job: design and baseline for the plant, nominal launches, "
+                                        "verification of both, report.md")
     rep.add_argument("--out", required=True, metavar="DIR")
     rep.add_argument("--samples", type=int, default=1000, metavar="N")
     rep.add_argument("--baseline-samples", type=int, default=200, metavar="N")
     rep.add_argument("--seed", type=int, default=0, metavar="S")
     rep.add_argument("--workers", type=int, metavar="W")
     _scheduler_arg(rep)
+    rep.add_argument("--ranges", metavar="R.toml", help="what varies and how (default: the shipped ranges file)")
+    rep.add_argument("--controller-file", metavar="C.toml", help="the launch controller (default: designed on the plant)")
+    rep.add_argument("--baseline-file", metavar="B.toml", help="the baseline (default: designed on the plant)")
+    _param_args(rep)
     rep.add_argument("--quiet", action="store_true")
     rep.set_defaults(func=_cmd_report)
 

@@ -169,7 +169,7 @@ class Hydraulics(_Section):
 
 
 class Friction(_Section):
-    """Plate friction: T_max = mu(slip) * mu_scale * F_n * F_n / (F_n + F_knee)."""
+    """Plate friction: T_max = mu(slip) * mu_scale * F_n * F_n / (F_n + F_knee), mu turned by mu_slope about mu_slip_ref."""
 
     mu_slip_poly: list[float] = Field(
         [-1.7e-6, 2.7e-4, 2.6e-2],
@@ -179,6 +179,10 @@ class Friction(_Section):
         max_length=8,
     )
     mu_scale: float = _f(1.0, "-", "multiplier on mu (unit-to-unit and condition spread)", gt=0.0, le=10.0)
+    mu_slope: float = _f(1.0, "-", "multiplier on mu's change with slip about its value at mu_slip_ref (curve steepness)",
+                         ge=0.0, le=10.0)
+    mu_slip_ref: float = _f(75.0, "rad/s", "slip about which mu_slope turns the curve (its value there is kept)",
+                            ge=0.0, le=1e3)
     F_knee: float = _f(100.0, "N", "normal force below which friction drops (plates barely pressed)", ge=0.0, le=1e5)
     drag_20C: float = _f(0.013, "N m s", "open-clutch viscous drag coefficient at 20 C (scales with viscosity)", ge=0.0, le=10.0)
 
@@ -265,19 +269,20 @@ def load(
         except tomllib.TOMLDecodeError as err:
             reason = str(err).replace("\n", " ")
             raise ParameterError(f"parameter file '{path}' is not valid TOML: {reason}") from None
-        for dotted, value in _flatten(given).items():
+        for dotted, value in flatten(given).items():
             _merge(data, dotted, value)
     for dotted, value in (overrides or {}).items():
         _merge(data, dotted, value)
     return _validate(data)
 
 
-def _flatten(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+def flatten(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Dotted path -> value of a nested table (``{"a": {"b": 1}}`` -> ``{"a.b": 1}``)."""
     out: dict[str, Any] = {}
     for k, v in d.items():
         key = f"{prefix}{k}"
         if isinstance(v, dict):
-            out.update(_flatten(v, key + "."))
+            out.update(flatten(v, key + "."))
         else:
             out[key] = v
     return out

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import WetclutchError
-from ..params import OIL_TEMP_RANGE_C, Params, load
+from ..params import OIL_TEMP_RANGE_C, Params, describe, load
 from ..plant.driveline import axle_for
 from .dynamics import FrequencyResponse, StepModel
 from .estimate import Estimate, source
@@ -53,13 +53,25 @@ class Identification:
         out["pressure_step_models"] = [m.as_json() for m in self.steps]
         out["frequency_responses"] = [r.as_json() for r in self.responses]
         out["validation"] = [{k: v for k, v in e.items() if k != "trace"} for e in self.validation]
+        # where each parameter of params.toml comes from, for the design step's account of its settings
+        found = identified_values(self.prior, e)
+        out["parameters"] = {path: "identified" if path in found else "prior"
+                             for path, *_ in describe(self.identified)}
         for key in REPORTED:  # always present, so that a reader can tell "not identified" from a typo
             out.setdefault(key, {"value": None, "se": None, "note": "not identified: no suitable runs", "sources": []})
         return out
 
 
 def identified_params(prior: Params, est: dict[str, Estimate]) -> Params:
-    """The prior parameters with the identified values put in.
+    """The prior parameters with the identified values put in (:func:`identified_values`)."""
+    try:
+        return load(None, identified_values(prior, est), base=prior)
+    except WetclutchError as err:
+        raise WetclutchError(f"identified values make no valid parameter set: {err}") from None
+
+
+def identified_values(prior: Params, est: dict[str, Estimate]) -> dict[str, Any]:
+    """Dotted parameter path -> identified value, for the parameters the estimates determine.
 
     ``friction.mu_slip_poly`` (``mu_scale`` 1), ``driveline.ratio``, ``rig.oil_temp_C``,
     ``hydraulics.x_contact`` (from the contact pressure, keeping the prior prestress,
@@ -70,6 +82,7 @@ def identified_params(prior: Params, est: dict[str, Estimate]) -> Params:
     if "mu_slip_poly" in est:
         sets["friction.mu_slip_poly"] = list(est["mu_slip_poly"].value)
         sets["friction.mu_scale"] = 1.0
+        sets["friction.mu_slope"] = 1.0
     ratio = est["ratio"].value if "ratio" in est else prior.driveline.ratio
     if "ratio" in est:
         sets["driveline.ratio"] = ratio
@@ -84,7 +97,4 @@ def identified_params(prior: Params, est: dict[str, Estimate]) -> Params:
         sets["driveline.k_a"] = k_a
         if d_a is not None:
             sets["driveline.d_a"] = d_a
-    try:
-        return load(None, sets, base=prior)
-    except WetclutchError as err:
-        raise WetclutchError(f"identified values make no valid parameter set: {err}") from None
+    return sets

@@ -5,8 +5,8 @@ The controllers see only what the rig measures (``T_r``, speeds, ``p_clutch``,
 (V, within the amplifier's range). Each controller is a compiled step function
 over a flat record of its settings (``ctrl``) and its own state vector
 (``cs``), called once per sample by the closed loop (:mod:`wetclutch.launch.loop`).
-This module names the slots of both and alone packs a record (:func:`pack_launch`,
-:func:`pack_pi`); the settings and their design live in :mod:`wetclutch.launch.design`.
+This module names the slots of both and alone packs a record (:func:`pack`); the
+settings and their design live in :mod:`wetclutch.launch.design`.
 
 ``launch`` (the design)
     Why each part is there:
@@ -71,9 +71,15 @@ This module names the slots of both and alone packs a record (:func:`pack_launch
       direction that would wind them further (conditional integration), and
       the pressure target is limited to the supply pressure.
 
-``pi`` (the baseline)
-    A plain PI controller on ``T_r`` from the torque request on, with the valve
-    at its lowest input before: no fill, no feedforward, no anti-windup.
+``baseline`` (what the field uses, for comparison)
+    A timed fill pulse (full input for the fill time of the design plant at the measured
+    oil temperature, tabulated over temperature), a short dip onto the magnet's rising
+    branch, then an open-loop hold at the input that the static map gives for the kiss
+    point plus the hold offset; once torque is requested, a PI loop on the measured
+    ``T_r`` around that hold input, ``u = u_hold + kp e + ki int(e)``, with
+    conditional-integration anti-windup and the same square-wave dither as the design.
+    Its gains come from a documented tuning rule on the design plant
+    (:func:`wetclutch.launch.design.baseline_gains`).
 """
 
 from __future__ import annotations
@@ -86,7 +92,7 @@ from ..physics import friction
 _jit = njit(cache=True, error_model="numpy", _nrt=False)
 _inline = njit(cache=True, error_model="numpy", _nrt=False, inline="always")
 
-CONTROLLERS = ("launch", "pi")
+CONTROLLERS = ("launch", "baseline")
 
 #: measured channels, in the order the closed loop passes them (SI; oil temperature in C)
 MEASURED = ("p_clutch", "T_r", "omega_p", "omega_1", "omega_r", "omega_s", "oil_temp")
@@ -94,20 +100,24 @@ M_P, M_TR, M_WP, M_W1, M_WR, M_WS, M_TEMP = range(len(MEASURED))
 
 # --- controller record: common fields
 KIND, DT, U_MIN, U_MAX = range(4)
-LAUNCH, PI = 0, 1
+LAUNCH, BASELINE = 0, 1
 # launch controller
 (P_KISS, HOLD_OFFSET, FILL_EXIT, A_P, RATIO, ETA, MU2, MU1, MU0, F_KNEE, KP_P, KI_P, KP_T, KI_T, P_MAX, TAU_REF,
  HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, HOLD_LEAD, FILL_EXIT_COLD, FF_T0, FF_DT,
  FF_NT, FF_P0, FF_DP, FF_NP, KI_HOLD, DITHER_AMP_T, DITHER_HALF_T, FF_SHIFT_T, REQ_LEAD) = range(4, 41)
-FF_TABLE = 41  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
+# baseline: its PI gains (V/N m, V/(N m s)) and the fill time (s) at each feedforward temperature
+KP_B, KI_B = 41, 42
+FILL_T = 43
+N_FILL_T = 5
+FF_TABLE = FILL_T + N_FILL_T  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
 N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power first
-# PI baseline (shares the slots after the common fields)
-KP_B, KI_B = 4, 5
-N_PI = 8
 
 # --- controller state
-CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED = range(11)
-N_CS = 11
+CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED = range(12)
+N_CS = 12
+#: a jump of the filtered pressure this far above the hold pressure in the hold: the plates have stopped the
+#: piston and the valve, open for the stroke's flow, has trapped the pressure high (Pa)
+CONTACT_JUMP = 0.1e5
 FILL, HOLD, TORQUE, LOCKUP = 0, 1, 2, 3
 SYNC_SLIP = 2.0  # rad/s: measured slip below which the clutch counts as synchronised
 
@@ -217,6 +227,11 @@ def _pressure_loop(ctrl, cs, p_set, p, temp, hold, dt):
     # current, not the rising branch the map was measured on: shift the map by the play
     shift = 0.0 if hold else ctrl[FF_SHIFT_T]
     u = _table(ctrl, temp, p_set) - shift + cs[CS_ZP] + kp * e_p
+    if hold and cs[CS_PF] < ctrl[P_KISS]:
+        # the piston still strokes: the flow it takes makes the pressure droop below the
+        # valve's static equilibrium, and an integrator wound up against that droop slams
+        # the pressure up when the plates stop the piston
+        ki = 0.0
     if u > ctrl[U_MAX]:
         u = ctrl[U_MAX]
         if e_p < 0.0:
@@ -263,6 +278,14 @@ def _launch(ctrl, cs, meas, t_ref):
         phase = HOLD
         cs[CS_PSET] = p
         cs[CS_DIP] = ctrl[DIP_N]
+    if phase == HOLD and cs[CS_DUMPED] == 0.0 and t_ref <= 0.0 and cs[CS_PF] > p_hold + CONTACT_JUMP:
+        # contact: the stem sits in its overlap with the pressure trapped above the hold and only
+        # the seal leakage would bring it down (creep on the waiting vehicle); dip the input
+        # once so that the drain port opens, and forget what the integrator learnt in the stroke
+        cs[CS_DUMPED] = 1.0
+        cs[CS_DIP] = ctrl[DIP_N]
+        cs[CS_ZP] = 0.0
+        cs[CS_PSET] = p_hold
     if phase == HOLD and cs[CS_DIP] > 0.0:
         # after the full-input fill the magnet sits on the descending branch of its
         # hysteresis and would hold the valve open; a short dip of the input brings it
@@ -294,20 +317,54 @@ def _launch(ctrl, cs, meas, t_ref):
     return _dither(ctrl, cs, u, hold)
 
 
+@_inline
+def _fill_time(ctrl, temp):
+    """The baseline's fill pulse length (s) at oil temperature ``temp``: linear in the tabulated temperatures."""
+    f = min(max((temp - ctrl[FF_T0]) / ctrl[FF_DT], 0.0), N_FILL_T - 1.0)
+    i = min(int(f), N_FILL_T - 2)
+    a = f - i
+    return (1.0 - a) * ctrl[FILL_T + i] + a * ctrl[FILL_T + i + 1]
+
+
 @_jit
-def _pi(ctrl, cs, meas, t_ref):
-    if t_ref <= 0.0:
-        return ctrl[U_MIN]
+def _baseline(ctrl, cs, meas, t_ref):
+    dt = ctrl[DT]
+    temp = meas[M_TEMP]
+    phase = int(cs[CS_PHASE])
+    u_hold = _table(ctrl, temp, ctrl[P_KISS] + ctrl[HOLD_OFFSET])
+    if phase == FILL:
+        # the baseline has no fill timer of its own state: the reference slot counts the pulse
+        cs[CS_REF] += dt
+        if cs[CS_REF] <= _fill_time(ctrl, temp):
+            return ctrl[U_MAX]
+        phase = HOLD
+        cs[CS_DIP] = ctrl[DIP_N]
+    if phase == HOLD and cs[CS_DIP] > 0.0:
+        cs[CS_DIP] -= 1.0
+        cs[CS_PHASE] = phase
+        return max(u_hold - ctrl[DIP], ctrl[U_MIN])
+    if phase == HOLD and t_ref > 0.0:
+        phase = TORQUE
+    if phase == TORQUE and abs(meas[M_WP] - meas[M_W1]) < SYNC_SLIP and meas[M_W1] > 0.0:
+        phase = LOCKUP
+    cs[CS_PHASE] = phase
+    if phase == LOCKUP:
+        return ctrl[U_MAX]
+    if phase == HOLD:
+        return u_hold
     e = t_ref - meas[M_TR]
-    cs[CS_ZT] += ctrl[KI_B] * e * ctrl[DT]
-    return min(max(ctrl[KP_B] * e + cs[CS_ZT], ctrl[U_MIN]), ctrl[U_MAX])
+    u = u_hold + ctrl[KP_B] * e + cs[CS_ZT]
+    # conditional integration: no winding further into a saturated input
+    if not ((u >= ctrl[U_MAX] and e > 0.0) or (u <= ctrl[U_MIN] and e < 0.0)):
+        cs[CS_ZT] += ctrl[KI_B] * e * dt
+    return _dither(ctrl, cs, min(max(u, ctrl[U_MIN]), ctrl[U_MAX]), False)
 
 
 @_jit
 def step(ctrl, cs, meas, t_ref):
     """One controller sample: measured channels ``meas`` and request ``t_ref`` (N m) -> input (V)."""
-    if int(ctrl[KIND]) == PI:
-        return _pi(ctrl, cs, meas, t_ref)
+    if int(ctrl[KIND]) == BASELINE:
+        return _baseline(ctrl, cs, meas, t_ref)
     return _launch(ctrl, cs, meas, t_ref)
 
 
@@ -320,16 +377,9 @@ def _common(r: np.ndarray, kind: int, dt: float, u_range: tuple[float, float]) -
     return r
 
 
-def pack_pi(kp: float, ki: float, dt: float, u_range: tuple[float, float]) -> np.ndarray:
-    """The PI baseline's record: ``u = kp e + ki int(e)`` (V/N m, V/(N m s)), input limits ``u_range`` (V)."""
-    r = np.zeros(N_PI)
-    r[KP_B], r[KI_B] = kp, ki
-    return _common(r, PI, dt, u_range)
-
-
-def pack_launch(s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pressures: np.ndarray, table: np.ndarray,
-                dt: float, u_range: tuple[float, float]) -> np.ndarray:
-    """The launch controller's record.
+def pack(kind: str, s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pressures: np.ndarray, table: np.ndarray,
+         fill: np.ndarray, dt: float, u_range: tuple[float, float]) -> np.ndarray:
+    """A controller's record (``kind`` one of :data:`CONTROLLERS`).
 
     Parameters
     ----------
@@ -343,20 +393,27 @@ def pack_launch(s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pressure
     temps, pressures, table
         The feedforward map: input voltage (V) at each (oil temperature C, pressure Pa) on
         uniform grids.
+    fill
+        The baseline's fill time (s) at each of ``temps`` (:data:`N_FILL_T` of them).
     """
     r = np.zeros(FF_TABLE + table.size)
-    slots = {P_KISS: "p_kiss", HOLD_OFFSET: "hold_offset", FILL_EXIT: "fill_exit", A_P: "a_p", RATIO: "ratio",
+    launch = {P_KISS: "p_kiss", HOLD_OFFSET: "hold_offset", FILL_EXIT: "fill_exit", A_P: "a_p", RATIO: "ratio",
              ETA: "eta", F_KNEE: "f_knee", KP_P: "kp_p", KI_P: "ki_p", KP_T: "kp_t", KI_T: "ki_t", P_MAX: "p_max",
              TAU_REF: "tau_ref", HOLD_RATE: "hold_rate", TAU_THETA: "tau_theta", THETA0: "theta0",
              DITHER_AMP: "dither_amp", DITHER_HALF: "dither_half", KP_HOLD: "kp_hold", DIP: "dip", DIP_N: "dip_n",
              HOLD_LEAD: "hold_lead", FILL_EXIT_COLD: "fill_exit_cold", KI_HOLD: "ki_hold",
              DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque", FF_SHIFT_T: "ff_shift",
              REQ_LEAD: "req_lead"}
-    for slot, name in slots.items():
+    baseline = {P_KISS: "p_kiss", HOLD_OFFSET: "hold_offset", DIP: "dip", DIP_N: "dip_n", KP_B: "kp", KI_B: "ki",
+                DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque"}
+    for slot, name in (launch if kind == "launch" else baseline).items():
         r[slot] = s[name]
+    if temps.size != N_FILL_T or fill.size != N_FILL_T:
+        raise ValueError(f"the feedforward and fill tables take {N_FILL_T} oil temperatures")
+    r[FILL_T:FILL_T + N_FILL_T] = fill
     r[MU2:MU0 + 1] = 0.0
     r[MU0 + 1 - len(mu):MU0 + 1] = mu
     r[FF_T0], r[FF_DT], r[FF_NT] = temps[0], temps[1] - temps[0], temps.size
     r[FF_P0], r[FF_DP], r[FF_NP] = pressures[0], pressures[1] - pressures[0], pressures.size
     r[FF_TABLE:] = table.ravel()
-    return _common(r, LAUNCH, dt, u_range)
+    return _common(r, LAUNCH if kind == "launch" else BASELINE, dt, u_range)

@@ -1,138 +1,169 @@
-"""Design of the launch controllers: their settings, and the records the compiled controllers run on.
+"""Design of the launch controllers for a plant: every setting, named, with its unit and where it came from.
 
-A design is made on a nominal parameter set (the plant as the controller believes it is):
-the kiss point is its contact pressure, the friction law its ``mu(slip)`` and knee, the
-feedforward map the inverse of its static pressure-vs-input curve over oil temperature
-(each point a constant-input run of the model), and the input range the rig's DC range.
-:func:`record` turns a design into the flat record of :mod:`wetclutch.launch.controller`.
+A design is made on a parameter set (the plant as the controller believes it is,
+typically ``wetclutch identify``'s ``params.toml``):
+
+* the kiss point is the plant's contact pressure, ``p_prestress + k_reset x_contact / A_p``;
+* the friction law is its ``mu(slip)`` (level and steepness included) with its knee;
+* the feedforward map is the inverse of its static pressure-vs-input curve over oil
+  temperature (each point a constant-input run of the model);
+* the baseline's fill pulse is the time the full input takes to stroke the piston
+  through :data:`FILL_STROKE` of its travel, at each tabulated oil temperature, and its
+  PI gains follow the SIMC rule on a first-order-plus-dead-time fit of the torque's
+  step response (:func:`baseline_gains`);
+* the launch controller's gains and timings are the settings it was developed with
+  (:data:`LAUNCH_DEFAULTS`), the same for every plant.
+
+:func:`design` returns a :class:`Design`; :func:`record` packs it for the compiled
+controller; :mod:`wetclutch.launch.settings` reads and writes it as a controller file.
 """
 
 from __future__ import annotations
 
 import functools
 import json
-from dataclasses import asdict, dataclass
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..errors import WetclutchError
-from ..params import Params
-from ..physics import actuator
+from ..params import Params, flatten
+from ..physics import actuator, friction
 from ..plant import clutch
 from ..rig.experiments import INPUT_RANGE
+from ..sim.network import integrate
+from ..sim.signals import Table
 from . import controller
 
-CONTROLLERS = controller.CONTROLLERS
+KINDS = controller.CONTROLLERS
 
 
 @dataclass(frozen=True)
-class LaunchGains:
-    """Settings of the ``launch`` controller (SI; pressures in Pa, gains per Pa or per N m).
+class Setting:
+    """What a setting is: unit, physical range, meaning."""
 
-    Attributes
-    ----------
-    hold_offset : float
-        Hold the pressure this far above the kiss point while waiting, Pa.
-    fill_exit, fill_exit_cold : float
-        End the full-input fill this far below the kiss point, Pa, with oil at
-        85 C and at 20 C (linear in between).
-    hold_rate : float
-        Rate at which the pressure set point then approaches the hold pressure, Pa/s.
-    kp_p, ki_p : float
-        Pressure PI once the torque is requested: V/Pa and V/(Pa s).
-    kp_hold, ki_hold : float
-        Pressure PI while holding at the kiss point (and while a request waits for
-        the fill), V/Pa and V/(Pa s): gentler than after the request, since a
-        faster integrator there winds the valve open against the stroking piston
-        and slams the pressure up at contact.
-    hold_lead : float
-        While approaching the hold, the set point stays at most this far above
-        the measured pressure, Pa.
-    req_lead : float
-        A request that comes before the fill is complete asks for this much
-        above the hold pressure, Pa, until the filtered pressure reaches the
-        hold: the torque is wanted now, so the valve may open further than in
-        the gentle hold approach (a slam at contact only brings the torque on).
-    dip, dip_time : float
-        After the fill, the input drops this far (V) below the hold input for
-        this long (s), to bring the magnet onto its rising hysteresis branch.
-    kp_t, ki_t : float
-        Torque loop on the pressure target: proportional (-) and integral (1/s)
-        gains on the torque error, scaled by the nominal pressure per N m.
-    tau_ref : float
-        Time constant of the first-order prefilter on the torque request, s.
-    tau_theta : float
-        Time constant of the friction estimate (measured over nominal torque), s.
-    theta0 : float
-        Friction factor assumed until it is measured: on the high side of the
-        spread, so that a grippy unit does not overshoot before the estimate
-        catches up (a slippery one is a little slower instead). 1.4 rather than
-        1.2: with the pressure now rising without staircases, the first rise
-        reaches the plates faster than the estimate (10 ms) settles, and at low
-        CVT ratios (high torque gain onto the axle) the overshoot then set the
-        robustness failures.
-    dither_amp, dither_hz : float
-        Square-wave dither on the valve input (V, Hz) against stem stick-slip,
-        before the request and while the fill completes: smaller than the
-        magnet's play, which swallows it, since near the overlap a wide dither
-        pumps oil in (inflow from the supply is far stronger than drain flow).
-    dither_amp_torque, dither_hz_torque : float
-        The dither once the clutch is filled and torque is requested (V, Hz):
-        wider than the magnet's play (about 0.225 V of input), so that the iron
-        follows the mean coil current and neither the play nor the stem
-        friction can stall the pressure in steps.
-    ff_shift_torque : float
-        Fraction of the design valve's play (``I_hyst / g_current``, V) taken
-        off the feedforward under the wide dither: the map was measured on the
-        rising hysteresis branch, the dithered magnet works on the centre line.
-    """
-
-    hold_offset: float = 0.05e5
-    fill_exit: float = 0.1e5
-    fill_exit_cold: float = 0.05e5
-    hold_rate: float = 1.0e5
-    kp_p: float = 0.05e-5
-    ki_p: float = 5.0e-5
-    kp_t: float = 0.0
-    ki_t: float = 8.0
-    tau_ref: float = 0.03
-    tau_theta: float = 0.01
-    theta0: float = 1.4
-    dither_amp: float = 0.05
-    kp_hold: float = 0.05e-5
-    ki_hold: float = 2.0e-5
-    dither_amp_torque: float = 0.3
-    dither_hz_torque: float = 125.0
-    ff_shift_torque: float = 1.0
-    req_lead: float = 0.2e5
-    dip: float = 0.5
-    hold_lead: float = 0.01e5
-    dip_time: float = 0.015
-    dither_hz: float = 125.0
+    unit: str
+    low: float
+    high: float
+    description: str
 
 
-@dataclass(frozen=True)
-class PIGains:
-    """Settings of the ``pi`` baseline: u = kp e + ki int(e), e = T_ref - T_r (V/N m, V/(N m s)).
+_P = (0.0, 5e6)
+#: the launch controller's settings that every plant shares, with their values
+LAUNCH_DEFAULTS = {
+    "hold_offset": 0.05e5, "fill_exit": 0.1e5, "fill_exit_cold": 0.05e5, "hold_rate": 1.0e5, "hold_lead": 0.01e5,
+    "req_lead": 0.2e5, "kp_p": 0.05e-5, "ki_p": 5.0e-5, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
+    "ki_t": 8.0, "tau_ref": 0.03, "tau_theta": 0.01, "theta0": 1.4, "dither_amp": 0.05, "dither_hz": 125.0,
+    "dither_amp_torque": 0.3, "dither_hz_torque": 125.0, "ff_shift_torque": 1.0, "dip": 0.5, "dip_time": 0.015,
+}
+#: the baseline's settings that are not derived from the plant
+BASELINE_DEFAULTS = {"hold_offset": 0.05e5, "dip": 0.5, "dip_time": 0.015, "dither_amp_torque": 0.3,
+                     "dither_hz_torque": 125.0}
 
-    Tuned by hand on the nominal 100 N m launch as the fastest pair whose slip phase
-    does not settle into a limit cycle (kp 0.01 and ki 0.15 did); whatever the gains,
-    the integrator winds up while the clutch fills, so the torque overshoots when the
-    plates close.
-    """
+_PLANT = {
+    "p_kiss": Setting("Pa", *_P, "kiss point: the contact pressure of the plates"),
+    "a_p": Setting("m^2", 1e-6, 1.0, "piston area"),
+    "ratio": Setting("-", 0.05, 20.0, "CVT speed ratio w_r / w_1"),
+    "eta": Setting("-", 0.01, 1.0, "CVT efficiency"),
+    "f_knee": Setting("N", 0.0, 1e5, "normal force of the friction knee"),
+    "p_max": Setting("Pa", 1e4, 5e6, "highest pressure the supply gives (supply or relief)"),
+    "mu2": Setting("m s^2/rad^2", -1.0, 1.0, "friction law mu(slip): quadratic coefficient"),
+    "mu1": Setting("m s/rad", -1.0, 1.0, "friction law mu(slip): linear coefficient"),
+    "mu0": Setting("m", 1e-6, 10.0, "friction law mu(slip): constant"),
+    "valve_play": Setting("V", 0.0, 5.0, "the magnet's hysteresis play as input voltage, I_hyst / g_current"),
+}
+#: every setting of each controller kind
+SETTINGS: dict[str, dict[str, Setting]] = {
+    "launch": {
+        **_PLANT,
+        "hold_offset": Setting("Pa", *_P, "hold this far above the kiss point while waiting"),
+        "fill_exit": Setting("Pa", *_P, "end the full-input fill this far below the kiss point, oil at 85 C"),
+        "fill_exit_cold": Setting("Pa", *_P, "the same with oil at 20 C (linear in between)"),
+        "hold_rate": Setting("Pa/s", 1.0, 1e8, "rate of the set point's approach to the hold pressure"),
+        "hold_lead": Setting("Pa", *_P, "the hold's set point leads the measured pressure by at most this"),
+        "req_lead": Setting("Pa", *_P, "a request during the fill asks this far above the hold pressure"),
+        "kp_p": Setting("V/Pa", 0.0, 1.0, "pressure loop, proportional gain, once torque is requested"),
+        "ki_p": Setting("V/(Pa s)", 0.0, 1.0, "pressure loop, integral gain, once torque is requested"),
+        "kp_hold": Setting("V/Pa", 0.0, 1.0, "pressure loop, proportional gain, in the hold"),
+        "ki_hold": Setting("V/(Pa s)", 0.0, 1.0, "pressure loop, integral gain, in the hold"),
+        "kp_t": Setting("-", 0.0, 100.0, "torque loop, proportional gain (per nominal pressure per N m)"),
+        "ki_t": Setting("1/s", 0.0, 1e4, "torque loop, integral gain (per nominal pressure per N m)"),
+        "tau_ref": Setting("s", 0.0, 10.0, "time constant of the request prefilter"),
+        "tau_theta": Setting("s", 0.0, 10.0, "time constant of the friction-factor estimate"),
+        "theta0": Setting("-", 0.1, 10.0, "friction factor assumed until it is measured"),
+        "dither_amp": Setting("V", 0.0, 5.0, "dither amplitude before the request"),
+        "dither_hz": Setting("Hz", 1.0, 500.0, "dither frequency before the request"),
+        "dither_amp_torque": Setting("V", 0.0, 5.0, "dither amplitude once torque is requested"),
+        "dither_hz_torque": Setting("Hz", 1.0, 500.0, "dither frequency once torque is requested"),
+        "ff_shift_torque": Setting("-", 0.0, 5.0, "share of the valve play taken off the feedforward under dither"),
+        "dip": Setting("V", 0.0, 5.0, "input dip after the fill (onto the magnet's rising branch)"),
+        "dip_time": Setting("s", 0.0, 1.0, "length of the dip"),
+    },
+    "baseline": {
+        "p_kiss": _PLANT["p_kiss"],
+        "hold_offset": Setting("Pa", *_P, "hold this far above the kiss point (open loop, through the static map)"),
+        "dip": Setting("V", 0.0, 5.0, "input dip after the fill pulse"),
+        "dip_time": Setting("s", 0.0, 1.0, "length of the dip"),
+        "kp": Setting("V/(N m)", 0.0, 10.0, "torque PI, proportional gain"),
+        "ki": Setting("V/(N m s)", 0.0, 1e3, "torque PI, integral gain"),
+        "dither_amp_torque": Setting("V", 0.0, 5.0, "dither amplitude once torque is requested"),
+        "dither_hz_torque": Setting("Hz", 1.0, 500.0, "dither frequency once torque is requested"),
+    },
+}
 
-    kp: float = 0.001
-    ki: float = 0.05
-
-
-#: oil temperatures (C) and input voltages (V) at which the feedforward map is tabulated
+#: oil temperatures (C) and input voltages (V) at which the feedforward map is tabulated; pressures it maps
 MAP_TEMPS = np.array([20.0, 40.0, 60.0, 80.0, 100.0])
 MAP_VOLTS = np.linspace(0.2, 5.0, 17)
 MAP_PRESSURES = np.linspace(0.0, 8e5, 33)
+#: share of the piston's stroke the baseline's fill pulse covers
+FILL_STROKE = 0.6
+#: torque of the baseline's tuning step (N m) and the oil temperature it is made at (C)
+TUNE_TORQUE = 100.0
+TUNE_TEMP_C = 85.0
+#: the baseline's closed-loop 95 % time aimed at by the choice of tau_c (s): inside the 0.2 s asked, with margin
+BASELINE_T95 = 0.15
 
 
-def static_map(params, temps: np.ndarray = MAP_TEMPS, volts: np.ndarray = MAP_VOLTS) -> np.ndarray:
+@dataclass(frozen=True)
+class Design:
+    """A controller designed for a plant.
+
+    Attributes
+    ----------
+    kind : str
+        ``launch`` or ``baseline``.
+    plant : Params
+        The parameter set it was designed on.
+    settings : dict
+        Setting name -> value in the unit :data:`SETTINGS` gives.
+    sources : dict
+        Setting name -> where its value came from (the plant's parameters and how they
+        were obtained, a tuning rule, or the controller's defaults).
+    temps_C, pressures_Pa, input_V : ndarray
+        The feedforward map: input (V) for each oil temperature (C) and pressure (Pa).
+    fill_s : ndarray
+        The baseline's fill pulse (s) at each of ``temps_C`` (zeros for ``launch``).
+    """
+
+    kind: str
+    plant: Params
+    settings: dict[str, float]
+    sources: dict[str, str]
+    temps_C: np.ndarray
+    pressures_Pa: np.ndarray
+    input_V: np.ndarray
+    fill_s: np.ndarray = field(default_factory=lambda: np.zeros(MAP_TEMPS.size))
+
+    def key(self) -> str:
+        """A stable text key of the design (for caches of its nominal responses)."""
+        return json.dumps([self.kind, self.plant.model_dump(), self.settings, self.input_V.round(12).tolist(),
+                           self.fill_s.round(12).tolist()], sort_keys=True)
+
+
+def static_map(params: Params, temps: np.ndarray = MAP_TEMPS, volts: np.ndarray = MAP_VOLTS) -> np.ndarray:
     """Static clutch pressure (Pa) vs DC input, shape (len(temps), len(volts)), from the model.
 
     Each point is a constant-input run of the clutch configuration, averaged over
@@ -156,49 +187,226 @@ def inverse_map(p_static: np.ndarray, volts: np.ndarray = MAP_VOLTS, pressures: 
     return table
 
 
-def design_params(rig: Params) -> Params:
-    """What the controller is designed on by default: the default rig at the rig's CVT ratio.
-
-    The transmission controller commands the ratio, so it knows it; everything
-    else (friction, fill, efficiency, stiffness, temperature) it must cope with.
-    """
-    d = Params()
-    d.driveline.ratio = rig.driveline.ratio
-    return d
-
-
-def _feedforward(params: Params) -> np.ndarray:
-    # keyed on the sections the static pressure map depends on, so that designs
-    # differing only in the driveline share one table
-    key = json.dumps({k: params.model_dump()[k] for k in ("valve", "hydraulics", "friction")}, sort_keys=True)
-    return _feedforward_table(key)
+def _sections_key(params: Params, sections: tuple[str, ...]) -> str:
+    return json.dumps({k: params.model_dump()[k] for k in sections}, sort_keys=True)
 
 
 @functools.lru_cache(maxsize=8)
 def _feedforward_table(key: str) -> np.ndarray:
-    params = Params.model_validate(json.loads(key))
-    return inverse_map(static_map(params))
+    return inverse_map(static_map(Params.model_validate(json.loads(key))))
 
 
-def record(name: str, params: Params, gains: Any = None, dt: float = 1e-3) -> np.ndarray:
-    """The controller's flat record, designed on the nominal parameter set ``params``."""
-    if name not in CONTROLLERS:
-        raise WetclutchError(f"unknown controller '{name}' (choose from {', '.join(CONTROLLERS)})")
-    u_range = INPUT_RANGE["dc"]
-    if name == "pi":
-        g = gains or PIGains()
-        return controller.pack_pi(g.kp, g.ki, dt, u_range)
-    g = gains or LaunchGains()
+def feedforward(params: Params) -> np.ndarray:
+    """The inverse static map of ``params`` over :data:`MAP_TEMPS` x :data:`MAP_PRESSURES` (cached on the
+    sections it depends on, so that plants differing only in the driveline share one table)."""
+    return _feedforward_table(_sections_key(params, ("valve", "hydraulics", "friction")))
+
+
+def fill_times(params: Params, temps: np.ndarray = MAP_TEMPS, t_end: float = 3.0) -> np.ndarray:
+    """Time (s) the full input takes to stroke the piston through :data:`FILL_STROKE` of its travel, per oil
+    temperature: the first time the pressure reaches ``p_prestress + FILL_STROKE (p_kiss - p_prestress)``."""
+    h = params.hydraulics
+    p_fill = h.p_prestress + FILL_STROKE * (actuator.contact_pressure(params) - h.p_prestress)
+    out = np.zeros(temps.size)
+    for i, temp in enumerate(temps):
+        rn = clutch.build(params, INPUT_RANGE["dc"][1], temp_C=float(temp))
+        tr = integrate(rn.network, t_end, dt_out=1e-3)
+        p = tr.x[:, rn.i_pressure]
+        hit = np.flatnonzero(p >= p_fill)
+        if hit.size == 0:
+            raise WetclutchError(f"the plant does not fill to {p_fill / 1e5:.2f} bar within {t_end:g} s at "
+                                 f"{temp:g} C (hydraulics.p_supply, hydraulics.p_prestress?)")
+        out[i] = float(tr.t[hit[0]])
+    return out
+
+
+def step_fit(t: np.ndarray, y: np.ndarray, t_step: float) -> tuple[float, float, float]:
+    """First-order-plus-dead-time fit of a step response by the two-point method.
+
+    ``y`` rises from its value at ``t_step`` to a final value (mean over the last fifth);
+    with ``t28`` and ``t63`` the times (from the step) at 28.3 % and 63.2 % of the rise,
+    ``tau = 1.5 (t63 - t28)`` and ``theta = t63 - tau`` (Smith's method). Returns
+    ``(rise, tau, theta)``.
+    """
+    after = t >= t_step
+    y0 = float(y[after][0])
+    tail = after & (t >= t[-1] - 0.2 * (t[-1] - t_step))
+    rise = float(np.mean(y[tail])) - y0
+    if not rise > 0.0:
+        raise WetclutchError("the tuning step gave no torque rise (is the plant's clutch able to carry torque?)")
+    frac = (y[after] - y0) / rise
+    ta = t[after] - t_step
+    t28 = float(ta[np.argmax(frac >= 0.283)])
+    t63 = float(ta[np.argmax(frac >= 0.632)])
+    tau = max(1.5 * (t63 - t28), 1e-3)
+    return rise, tau, max(t63 - tau, 0.0)
+
+
+def baseline_gains(params: Params, table: np.ndarray, fill: np.ndarray, hold_offset: float,
+                   dip: float, dip_time: float) -> tuple[float, float, dict[str, float]]:
+    """The baseline's PI gains by the SIMC rule on the plant's open-loop torque step.
+
+    On the plant at :data:`TUNE_TEMP_C`, the baseline's own fill pulse, dip and hold
+    are applied and, 1 s later, an input step that the static map and the nominal
+    friction law say gives :data:`TUNE_TORQUE`; a first-order-plus-dead-time model
+    ``K e^(-theta s) / (tau s + 1)`` is fitted to the axle torque (:func:`step_fit`) and
+    the SIMC rule (Skogestad 2003), ``kp = tau / (K (tau_c + theta))``,
+    ``ki = kp / min(tau, 4 (tau_c + theta))``, with ``tau_c`` chosen so that the first-order
+    closed loop ``e^(-theta s) / (tau_c s + 1)`` reaches 95 % at :data:`BASELINE_T95`,
+    ``tau_c = (BASELINE_T95 - theta) / 3``, and never below ``theta`` (SIMC's tight choice;
+    faster than that the loop loses its margins).
+    Returns ``(kp, ki, fit)``.
+    """
+    temp = TUNE_TEMP_C
+    p_kiss = actuator.contact_pressure(params)
     f = params.friction
-    poly = np.trim_zeros(np.asarray(f.mu_slip_poly, dtype=float), "f") * f.mu_scale
+    mu = float(np.polyval(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_ref), 100.0))
+    d = params.driveline
+    t_c = TUNE_TORQUE * d.ratio / d.eta
+    f_n = friction.force_for.py_func(t_c / mu, f.F_knee)
+    p_step = p_kiss + f_n / params.hydraulics.A_p
+    row = int(np.argmin(np.abs(MAP_TEMPS - temp)))
+    u_hold = float(np.interp(p_kiss + hold_offset, MAP_PRESSURES, table[row]))
+    u_step = float(np.interp(p_step, MAP_PRESSURES, table[row]))
+    t_fill = float(fill[row])
+    t_step, t_end = 1.0, 1.6
+    eps = 1e-3
+    tt = [0.0, t_fill, t_fill + eps, t_fill + dip_time, t_fill + dip_time + eps, t_step, t_step + eps, t_end]
+    vv = [INPUT_RANGE["dc"][1], INPUT_RANGE["dc"][1], max(u_hold - dip, INPUT_RANGE["dc"][0]),
+          max(u_hold - dip, INPUT_RANGE["dc"][0]), u_hold, u_hold, u_step, u_step]
+    rn = clutch.build(params, Table(np.array(tt), np.array(vv), kinks_are_breakpoints=True), temp_C=temp)
+    tr = integrate(rn.network, t_end, dt_out=1e-3)
+    rise, tau, theta = step_fit(tr.t, tr.spring_torque("axle"), t_step)
+    gain = rise / (u_step - u_hold)
+    tau_c = max((BASELINE_T95 - theta) / 3.0, theta, 1e-3)
+    kp = tau / (gain * (tau_c + theta))
+    ki = kp / min(tau, 4.0 * (tau_c + theta))
+    return kp, ki, {"K_Nm_per_V": gain, "tau_s": tau, "theta_s": theta, "tau_c_s": tau_c}
+
+
+def _origin(origin: dict[str, str], *paths: str) -> str:
+    """How the plant's values at ``paths`` were obtained, e.g. ``identified``, ``parameter file``, ``default``."""
+    kinds = sorted({origin.get(p, "default") for p in paths})
+    return " / ".join(kinds)
+
+
+def design(plant: Params, kind: str = "launch", origin: dict[str, str] | None = None) -> Design:
+    """Design controller ``kind`` for ``plant``.
+
+    Parameters
+    ----------
+    plant
+        The parameter set to design on.
+    kind
+        ``launch`` (the design) or ``baseline`` (the fair comparison).
+    origin
+        Dotted parameter path -> how its value was obtained (``identified``,
+        ``parameter file``, ``--set``; missing: ``default``), for the settings' sources.
+    """
+    if kind not in KINDS:
+        raise WetclutchError(f"unknown controller '{kind}' (choose from {', '.join(KINDS)})")
+    origin = origin or {}
+    f, h, d, v = plant.friction, plant.hydraulics, plant.driveline, plant.valve
+    poly = np.trim_zeros(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_ref), "f")
     if poly.size > controller.N_MU:
         # the controller's friction law is quadratic (the study's fit); dropping terms would be silent
         raise WetclutchError(f"friction.mu_slip_poly: the launch controller takes at most a quadratic, "
                              f"got {poly.size} coefficients")
-    h, d = params.hydraulics, params.driveline
-    settings = {**asdict(g), "p_kiss": actuator.contact_pressure(params), "a_p": h.A_p, "ratio": d.ratio,
-                "eta": d.eta, "f_knee": f.F_knee, "p_max": min(h.p_supply, h.p_relief),
-                "dither_half": round(0.5 / (g.dither_hz * dt)), "dither_half_torque": round(0.5 / (g.dither_hz_torque * dt)),
-                "dip_n": round(g.dip_time / dt),
-                "ff_shift": g.ff_shift_torque * params.valve.I_hyst / params.valve.g_current}
-    return controller.pack_launch(settings, poly, MAP_TEMPS, MAP_PRESSURES, _feedforward(params), dt, u_range)
+    mu = np.zeros(controller.N_MU)
+    mu[controller.N_MU - poly.size:] = poly
+    kiss_src = _origin(origin, "hydraulics.p_prestress", "hydraulics.k_reset", "hydraulics.x_contact",
+                       "hydraulics.A_p")
+    plant_values = {
+        "p_kiss": (actuator.contact_pressure(plant), f"plant ({kiss_src}): p_prestress + k_reset x_contact / A_p"),
+        "a_p": (h.A_p, f"plant ({_origin(origin, 'hydraulics.A_p')}): hydraulics.A_p"),
+        "ratio": (d.ratio, f"plant ({_origin(origin, 'driveline.ratio')}): driveline.ratio"),
+        "eta": (d.eta, f"plant ({_origin(origin, 'driveline.eta')}): driveline.eta"),
+        "f_knee": (f.F_knee, f"plant ({_origin(origin, 'friction.F_knee')}): friction.F_knee"),
+        "p_max": (min(h.p_supply, h.p_relief), f"plant ({_origin(origin, 'hydraulics.p_supply', 'hydraulics.p_relief')}):"
+                  " min(p_supply, p_relief)"),
+        "valve_play": (v.I_hyst / v.g_current, f"plant ({_origin(origin, 'valve.I_hyst', 'valve.g_current')}): "
+                       "I_hyst / g_current"),
+    }
+    mu_src = (f"plant ({_origin(origin, 'friction.mu_slip_poly', 'friction.mu_scale', 'friction.mu_slope')}): "
+              "mu_slip_poly x mu_scale, turned by mu_slope")
+    for name, value in zip(("mu2", "mu1", "mu0"), mu):
+        plant_values[name] = (float(value), mu_src)
+    table = feedforward(plant)
+    map_src = f"plant ({_origin(origin, 'valve.V_supply', 'hydraulics.p_supply')}): inverse static map"
+    if kind == "launch":
+        settings = {k: float(val) for k, (val, _) in plant_values.items()} | LAUNCH_DEFAULTS
+        sources = {k: src for k, (_, src) in plant_values.items()}
+        sources |= {k: "controller default" for k in LAUNCH_DEFAULTS}
+        return Design(kind, plant, settings, sources | {"input_V": map_src}, MAP_TEMPS.copy(), MAP_PRESSURES.copy(),
+                      table)
+    fill = _fill_times_cached(_sections_key(plant, ("valve", "hydraulics", "friction", "driveline")))
+    b = BASELINE_DEFAULTS
+    kp, ki, fit = baseline_gains(plant, table, fill, b["hold_offset"], b["dip"], b["dip_time"])
+    rule = (f"SIMC (tau_c = {fit['tau_c_s'] * 1e3:.1f} ms) on the plant's torque step at {TUNE_TEMP_C:g} C: K = {fit['K_Nm_per_V']:.4g} N m/V, "
+            f"tau = {fit['tau_s'] * 1e3:.1f} ms, theta = {fit['theta_s'] * 1e3:.1f} ms")
+    settings = {"p_kiss": plant_values["p_kiss"][0], **b, "kp": kp, "ki": ki}
+    sources = {"p_kiss": plant_values["p_kiss"][1], **{k: "controller default" for k in b}, "kp": rule, "ki": rule,
+               "input_V": map_src,
+               "fill_s": f"plant: time to {FILL_STROKE:.0%} of the stroke at full input, per oil temperature"}
+    return Design(kind, plant, settings, sources, MAP_TEMPS.copy(), MAP_PRESSURES.copy(), table, fill)
+
+
+@functools.lru_cache(maxsize=8)
+def _fill_times_cached(key: str) -> np.ndarray:
+    return fill_times(Params.model_validate(json.loads(key)))
+
+
+@functools.lru_cache(maxsize=16)
+def _cached(plant_json: str, kind: str) -> Design:
+    return design(Params.model_validate_json(plant_json), kind)
+
+
+def cached(plant: Params, kind: str = "launch") -> Design:
+    """:func:`design` of ``plant``, remembered (designs are pure functions of the plant)."""
+    return _cached(plant.model_dump_json(), kind)
+
+
+def record(d: Design, dt: float = 1e-3) -> np.ndarray:
+    """The flat record the compiled controller runs on (:func:`wetclutch.launch.controller.pack`)."""
+    s = dict(d.settings)
+    s["dip_n"] = round(s["dip_time"] / dt)
+    s["dither_half_torque"] = round(0.5 / (s["dither_hz_torque"] * dt))
+    mu = np.zeros(controller.N_MU)
+    if d.kind == "launch":
+        s["dither_half"] = round(0.5 / (s["dither_hz"] * dt))
+        s["ff_shift"] = s["ff_shift_torque"] * s["valve_play"]
+        mu = np.array([s["mu2"], s["mu1"], s["mu0"]])
+    return controller.pack(d.kind, s, mu, d.temps_C, d.pressures_Pa, d.input_V, d.fill_s, dt, INPUT_RANGE["dc"])
+
+
+def with_settings(d: Design, **changes: float) -> Design:
+    """The design with some settings changed (names checked)."""
+    unknown = sorted(set(changes) - set(SETTINGS[d.kind]))
+    if unknown:
+        raise WetclutchError(f"unknown setting '{unknown[0]}' of the {d.kind} controller")
+    return replace(d, settings=d.settings | {k: float(v) for k, v in changes.items()},
+                   sources=d.sources | {k: "changed" for k in changes})
+
+
+def plant_origin(param_file: str | Path | None, sets: dict[str, Any] | None = None) -> dict[str, str]:
+    """How each parameter of a plant given on the command line was obtained, for the settings' sources.
+
+    ``--set`` overrides first, then, for a parameter file written by ``wetclutch identify``
+    (an ``identified.json`` beside it), ``identified`` or ``prior``; else ``parameter file``
+    for the keys the file sets. Unlisted parameters are the defaults.
+    """
+    out: dict[str, str] = {}
+    if param_file is not None:
+        path = Path(param_file)
+        try:
+            out |= {k: "parameter file" for k in flatten(tomllib.loads(path.read_text()))}
+        except (OSError, tomllib.TOMLDecodeError):
+            pass  # the parameter loader reports an unreadable file
+        ident = path.with_name("identified.json")
+        if ident.is_file():
+            try:
+                found = json.loads(ident.read_text()).get("parameters", {})
+            except (OSError, ValueError):
+                found = {}
+            out |= {k: str(v) for k, v in found.items() if isinstance(v, str)}
+    return out | {k: "--set" for k in (sets or {})}

@@ -15,7 +15,6 @@ The clutch is in standby from t = 0; the torque request comes at
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -179,30 +178,37 @@ class LaunchResult:
     stats: dict[str, int] = field(default_factory=dict)
 
 
-def simulate(params: Params | None = None, controller: str = "launch", conditions: Conditions | None = None,
-             design: Params | None = None, gains: Any = None, nominal: metrics.Response | None = None) -> LaunchResult:
+def _design(plant: Params, controller: design_.Design | str) -> design_.Design:
+    if isinstance(controller, design_.Design):
+        return controller
+    if controller not in design_.KINDS:
+        raise WetclutchError(f"unknown controller '{controller}' (choose from {', '.join(design_.KINDS)})")
+    return design_.cached(plant, controller)
+
+
+def simulate(params: Params | None = None, controller: design_.Design | str = "launch",
+             conditions: Conditions | None = None, nominal: metrics.Response | None = None) -> LaunchResult:
     """Run one closed-loop launch.
 
     Parameters
     ----------
     params
-        The rig as it really is (the study's defaults if None).
+        The plant as it really is (the study's defaults if None).
     controller
-        ``launch`` or ``pi`` (see :mod:`wetclutch.launch.controller`).
+        A :class:`~wetclutch.launch.design.Design` (designed on any plant: a design
+        running on a plant that differs from its own is what verification does), or a
+        kind, ``launch`` or ``baseline``, to design on ``params`` itself.
     conditions
         Request, profile, oil temperature, noise seed.
-    design
-        The nominal parameter set the controller was designed on (default: the
-        defaults). Verification runs a controller designed on the defaults
-        against rigs that differ from them.
     nominal
-        The nominal launch's response, for the robustness requirement (default:
-        computed on ``design`` at the design oil temperature).
+        The nominal launch's response, for the robustness requirement (default: the
+        design on its own plant at that plant's oil temperature, same request).
     """
     p = params if params is not None else Params()
+    d = _design(p, controller)
     cond = (conditions or Conditions()).checked()
     temp = p.rig.oil_temp_C if cond.oil_temp_C is None else float(cond.oil_temp_C)
-    ctrl = design_.record(controller, design or design_.design_params(p), gains, cond.dt)
+    ctrl = design_.record(d, cond.dt)
     rn = clutch.build(p, External(0), pwm=False, config="clutch", temp_C=temp)
     net, x0, ext = rn.network.compile()
     ws = new_workspace(net, x0)
@@ -239,19 +245,22 @@ def simulate(params: Params | None = None, controller: str = "launch", condition
     t_sync = tr.sync_time("clutch")
     resp = metrics.response(signals["time"].to_numpy(), signals["T_r"].to_numpy(), t_ref[:m], cond.t_request, t_sync)
     if nominal is None:
-        nominal = nominal_response(controller, cond, gains)
+        nominal = nominal_response(d, cond)
     summary = metrics.summary(resp, nominal, slip_energy=float(truth["E_clutch"].iloc[-1]), t_sync=t_sync)
-    summary.update(controller=controller, t_ref_Nm=cond.t_ref, profile=str(cond.profile), oil_temp_C=temp)
-    return LaunchResult(signals, truth, summary, cond, controller, tr.stats)
+    summary.update(controller=d.kind, t_ref_Nm=cond.t_ref, profile=str(cond.profile), oil_temp_C=temp)
+    return LaunchResult(signals, truth, summary, cond, d.kind, tr.stats)
 
 
-@functools.lru_cache(maxsize=64)
-def _nominal(controller: str, cond: Conditions, gains: Any) -> metrics.Response:
-    res = simulate(Params(), controller, cond, gains=gains, nominal=metrics.Response.empty())
-    return metrics.response(res.signals["time"].to_numpy(), res.signals["T_r"].to_numpy(),
-                            res.signals["t_ref"].to_numpy(), cond.t_request, res.summary["t_sync_s"])
+_NOMINAL: dict[tuple[str, Conditions], metrics.Response] = {}
 
 
-def nominal_response(controller: str, cond: Conditions, gains: Any = None) -> metrics.Response:
-    """The response of the design rig (defaults, design oil temperature, same request) for comparison."""
-    return _nominal(controller, replace(cond, oil_temp_C=None, seed=0), gains)
+def nominal_response(d: design_.Design, cond: Conditions) -> metrics.Response:
+    """The response of the design on its own plant (that plant's oil temperature, no noise seed change, same
+    request): what the robustness requirement compares a launch with."""
+    c = replace(cond, oil_temp_C=None, seed=0)
+    key = (d.key(), c)
+    if key not in _NOMINAL:
+        res = simulate(d.plant, d, c, nominal=metrics.Response.empty())
+        _NOMINAL[key] = metrics.response(res.signals["time"].to_numpy(), res.signals["T_r"].to_numpy(),
+                                         res.signals["t_ref"].to_numpy(), c.t_request, res.summary["t_sync_s"])
+    return _NOMINAL[key]

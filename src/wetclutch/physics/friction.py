@@ -11,6 +11,10 @@ low normal force that the study saw below 1 V ("plates barely pressed"). A
 rational knee rather than ``1 - exp(-F_n/F_knee)``: the same shape to within the
 study's scatter, without a transcendental function in every evaluation.
 
+A clutch's curve differs from the study's fit in level (``mu_scale``) and in steepness
+(``mu_slope``: the change of ``mu`` with slip scaled about a reference slip, where the
+value is kept); :func:`curve` makes the polynomial the model runs on.
+
 Each function is compiled for the numerical core (inlined there) and, being plain
 arithmetic, also runs on floats and numpy arrays through ``.py_func`` for
 identification and post-processing, so the law is written once.
@@ -50,3 +54,16 @@ def mu(coef, slip):
     for c in coef:
         v = v * s + c
     return v
+
+
+def curve(poly, scale: float = 1.0, slope: float = 1.0, slip_ref: float = 0.0) -> np.ndarray:
+    """The ``mu(slip)`` coefficients (highest power first) of a clutch with level ``scale`` and steepness ``slope``.
+
+    ``mu'(w) = scale * (mu(w_ref) + slope * (mu(w) - mu(w_ref)))``: the slip-dependent terms are
+    multiplied by ``slope`` and the constant moved so that ``mu'(w_ref) = scale * mu(w_ref)``.
+    """
+    c = np.asarray(poly, dtype=float)
+    ref = float(np.polyval(c, slip_ref))
+    out = c * slope
+    out[-1] += (1.0 - slope) * ref
+    return out * scale

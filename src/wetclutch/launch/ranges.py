@@ -1,0 +1,204 @@
+"""Verification ranges as data: what varies between the plant a controller was designed on and the plants it meets.
+
+A ranges file (TOML) has one table per range; :data:`DEFAULT_FILE` is the one shipped,
+with every key explained. A range moves one parameter of the plant (``target`` a dotted
+path of :class:`~wetclutch.params.Params`) or one launch condition (:data:`CONDITIONS`):
+
+* ``how = "abs"``: the sampled value is the value; ``"rel"``: a factor on the plant's value;
+  ``"offset"``: added to the plant's value;
+* ``dist = "uniform"`` over ``[low, high]``, or ``"normal"`` with ``low`` and ``high`` at
+  minus and plus two standard deviations (truncated there);
+* ``corner = true``: the corner cases take this range's extremes.
+
+:func:`load` validates a file (one-line errors naming the range and key);
+:func:`draw` and :func:`corners` turn ranges into values; :func:`apply` puts values into
+a plant.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import WetclutchError
+from ..params import Params, load as load_params
+
+DEFAULT_FILE = Path(__file__).resolve().parent / "data" / "ranges.toml"
+#: launch conditions a range may vary (the rest of a range's targets are parameters)
+CONDITIONS = ("oil_temp_C", "t_ref", "noise_scale")
+HOWS = ("abs", "rel", "offset")
+DISTS = ("uniform", "normal")
+KEYS = {"target", "how", "dist", "low", "high", "corner", "unit"}
+
+
+class RangesError(WetclutchError):
+    """A ranges file that cannot be used."""
+
+
+@dataclass(frozen=True)
+class Range:
+    """One varied quantity (see the module docstring for the fields)."""
+
+    name: str
+    target: str
+    how: str = "abs"
+    low: float = 0.0
+    high: float = 0.0
+    dist: str = "uniform"
+    corner: bool = False
+    unit: str = ""
+
+    @property
+    def is_condition(self) -> bool:
+        return self.target in CONDITIONS
+
+    def draw(self, rng: np.random.Generator) -> float:
+        """One sampled value (a factor or offset for ``rel``/``offset``)."""
+        if self.dist == "uniform":
+            return float(rng.uniform(self.low, self.high))
+        mid, sd = 0.5 * (self.low + self.high), 0.25 * (self.high - self.low)
+        return float(np.clip(rng.normal(mid, sd), self.low, self.high))
+
+    def value(self, base: float, x: float) -> float:
+        """The target's value for sampled ``x`` on a plant whose value is ``base``."""
+        if self.how == "rel":
+            return base * x
+        if self.how == "offset":
+            return base + x
+        return x
+
+
+def _err(where: str, msg: str) -> RangesError:
+    return RangesError(f"{where}: {msg}")
+
+
+def _number(where: str, raw: dict[str, Any], key: str) -> float:
+    if key not in raw:
+        raise _err(where, f"missing key '{key}'")
+    v = raw[key]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise _err(f"{where}.{key}", f"must be a finite number (got {v!r})")
+    return float(v)
+
+
+def parse(data: dict[str, Any], source: str = "ranges") -> list[Range]:
+    """Ranges from the parsed TOML ``data``; ``source`` names the file in errors."""
+    if not isinstance(data, dict) or not data:
+        raise _err(source, "no ranges (one table per range)")
+    defaults = Params().model_dump()
+    out = []
+    for name, raw in data.items():
+        where = f"{source}: [{name.encode('unicode_escape').decode()}]"
+        if not isinstance(raw, dict):
+            raise _err(where, "must be a table (target, how, low, high, ...)")
+        unknown = sorted(set(raw) - KEYS)
+        if unknown:
+            raise _err(where, f"unknown key '{unknown[0]}' (known: {', '.join(sorted(KEYS))})")
+        target = raw.get("target")
+        if not isinstance(target, str):
+            raise _err(where, "missing key 'target' (a parameter path or one of " + ", ".join(CONDITIONS) + ")")
+        if target not in CONDITIONS:
+            section, _, key = target.partition(".")
+            value = defaults.get(section, {}).get(key) if isinstance(defaults.get(section), dict) else None
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise _err(f"{where}.target", f"'{target}' is neither a numeric parameter nor one of "
+                           + ", ".join(CONDITIONS))
+        how = raw.get("how", "abs")
+        if how not in HOWS:
+            raise _err(f"{where}.how", f"must be one of {', '.join(HOWS)} (got {how!r})")
+        if target in CONDITIONS and how != "abs":
+            raise _err(f"{where}.how", f"a condition ('{target}') takes absolute values only")
+        dist = raw.get("dist", "uniform")
+        if dist not in DISTS:
+            raise _err(f"{where}.dist", f"must be one of {', '.join(DISTS)} (got {dist!r})")
+        low, high = _number(where, raw, "low"), _number(where, raw, "high")
+        if not low <= high:
+            raise _err(f"{where}.low", f"must not exceed high ({low:g} > {high:g})")
+        corner = raw.get("corner", False)
+        if not isinstance(corner, bool):
+            raise _err(f"{where}.corner", f"must be true or false (got {corner!r})")
+        unit = raw.get("unit", "")
+        if not isinstance(unit, str):
+            raise _err(f"{where}.unit", f"must be a string (got {unit!r})")
+        out.append(Range(name, target, how, low, high, dist, corner, unit))
+    targets = [r.target for r in out]
+    dup = next((t for t in targets if targets.count(t) > 1), None)
+    if dup:
+        raise _err(source, f"target '{dup}' is varied by two ranges")
+    if sum(r.corner for r in out) > 10:
+        raise _err(source, "more than 10 corner ranges (2^n corner cases)")
+    return out
+
+
+def load(path: str | Path | None = None) -> list[Range]:
+    """The ranges of the TOML file ``path`` (default: :data:`DEFAULT_FILE`)."""
+    path = Path(path) if path is not None else DEFAULT_FILE
+    try:
+        data = tomllib.loads(path.read_text())
+    except OSError as e:
+        raise RangesError(f"cannot read ranges file '{path}': {e.strerror}") from None
+    except tomllib.TOMLDecodeError as e:
+        raise RangesError(f"ranges file '{path}' is not valid TOML: {str(e).splitlines()[0]}") from None
+    return parse(data, str(path))
+
+
+def draw(ranges: list[Range], rng: np.random.Generator) -> dict[str, float]:
+    """One random sample: range name -> sampled value (a factor or offset where ``how`` says so)."""
+    return {r.name: r.draw(rng) for r in ranges}
+
+
+def nominal(ranges: list[Range], plant: Params, conditions: dict[str, float]) -> dict[str, float]:
+    """Each range's value that leaves the plant and the conditions as they are."""
+    out = {}
+    for r in ranges:
+        if r.how == "rel":
+            out[r.name] = 1.0
+        elif r.how == "offset":
+            out[r.name] = 0.0
+        elif r.is_condition:
+            out[r.name] = float(conditions[r.target])
+        else:
+            section, key = r.target.split(".")
+            out[r.name] = float(getattr(getattr(plant, section), key))
+    return out
+
+
+def corners(ranges: list[Range]) -> list[dict[str, float]]:
+    """Every combination of the corner ranges' extremes (the other ranges left out: their nominal values)."""
+    cr = [r for r in ranges if r.corner]
+    return [dict(zip([r.name for r in cr], combo)) for combo in itertools.product(*[(r.low, r.high) for r in cr])]
+
+
+def apply(ranges: list[Range], values: dict[str, float], plant: Params) -> tuple[Params, dict[str, float]]:
+    """The plant with the parameter ranges' values put in, and the conditions' values (by condition name).
+
+    Raises a one-line error if a value leaves the parameter's physical range.
+    """
+    sets, cond = {}, {}
+    for r in ranges:
+        if r.name not in values:
+            continue
+        if r.is_condition:
+            cond[r.target] = r.value(0.0, values[r.name])
+        else:
+            section, key = r.target.split(".")
+            sets[r.target] = r.value(float(getattr(getattr(plant, section), key)), values[r.name])
+    return (load_params(None, sets, base=plant) if sets else plant), cond
+
+
+def check(ranges: list[Range], plant: Params) -> None:
+    """Refuse ranges that take a parameter of ``plant`` out of its physical range (one line naming the range)."""
+    for r in ranges:
+        if r.is_condition:
+            continue
+        for end in (r.low, r.high):
+            try:
+                apply([r], {r.name: end}, plant)
+            except WetclutchError as e:
+                raise RangesError(f"range [{r.name}] at {end:g} leaves the plant's physical range: {e}") from None

@@ -1,0 +1,152 @@
+"""The controller file: a design as TOML, every setting named with its unit and source, the tables included.
+
+Layout::
+
+    kind = "launch"                 # or "baseline"
+    [settings.p_kiss]
+    value = 70033.4
+    unit = "Pa"
+    source = "plant (identified): p_prestress + k_reset x_contact / A_p"
+    ...
+    [tables]
+    temps_C = [...]                 # feedforward map: oil temperatures
+    pressures_Pa = [...]            #                  pressures
+    input_V = [[...], ...]          #                  input for each (temperature, pressure)
+    fill_s = [...]                  # the baseline's fill pulse per temperature
+    source, fill_source = "..."     # where the tables came from
+    [plant]                         # the parameter set the controller was designed on
+    ...
+
+:func:`to_toml` writes it, :func:`loads`/:func:`load` read and validate it (one line
+naming the offending field; a file of another kind than asked for is refused).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import tomli_w
+
+from ..errors import ParameterError, WetclutchError
+from ..params import flatten, load as load_params
+from .design import KINDS, MAP_TEMPS, SETTINGS, Design
+
+
+class ControllerFileError(WetclutchError):
+    """A controller file that cannot be used."""
+
+
+def to_toml(d: Design) -> str:
+    """The controller file of design ``d``."""
+    data: dict[str, Any] = {
+        "kind": d.kind,
+        "settings": {name: {"value": float(d.settings[name]), "unit": spec.unit, "source": d.sources.get(name, ""),
+                            "description": spec.description}
+                     for name, spec in SETTINGS[d.kind].items()},
+        "tables": {"temps_C": d.temps_C.tolist(), "pressures_Pa": d.pressures_Pa.tolist(),
+                   "input_V": d.input_V.tolist(), "fill_s": d.fill_s.tolist(),
+                   "source": d.sources.get("input_V", ""), "fill_source": d.sources.get("fill_s", "")},
+        "plant": d.plant.model_dump(),
+    }
+    head = f"# wetclutch controller file: the {d.kind} controller, SI units (each setting's unit beside it)\n"
+    return head + tomli_w.dumps(data)
+
+
+def _err(where: str, msg: str) -> ControllerFileError:
+    return ControllerFileError(f"{where}: {msg}")
+
+
+def _array(where: str, raw: Any, ndim: int) -> np.ndarray:
+    try:
+        a = np.array(raw, dtype=float)
+    except (TypeError, ValueError):
+        raise _err(where, "must be an array of numbers") from None
+    if a.ndim != ndim or a.size == 0 or not np.all(np.isfinite(a)):
+        raise _err(where, f"must be a {ndim}-D array of finite numbers")
+    return a
+
+
+def _uniform(where: str, a: np.ndarray) -> None:
+    if a.size < 2 or np.any(np.diff(a) <= 0) or not np.allclose(np.diff(a), a[1] - a[0], rtol=1e-9, atol=0):
+        raise _err(where, "must be evenly spaced and increasing")
+
+
+def loads(text: str, source: str = "controller file", kind: str | None = None) -> Design:
+    """A design from controller-file ``text``; ``kind``, if given, is the kind the caller needs."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise _err(source, f"not valid TOML: {str(e).splitlines()[0]}") from None
+    unknown = sorted(set(data) - {"kind", "settings", "tables", "plant"})
+    if unknown:
+        raise _err(source, f"unknown section '{unknown[0]}'")
+    k = data.get("kind")
+    if k not in KINDS:
+        raise _err(f"{source}: kind", f"must be one of {', '.join(KINDS)} (got {k!r})")
+    if kind is not None and k != kind:
+        raise _err(f"{source}: kind", f"is a {k} controller, but a {kind} controller is needed here")
+    for section in ("settings", "tables", "plant"):
+        if not isinstance(data.get(section), dict):
+            raise _err(source, f"missing section [{section}]")
+    spec = SETTINGS[k]
+    given = data["settings"]
+    extra = sorted(set(given) - set(spec))
+    if extra:
+        raise _err(f"{source}: settings.{extra[0]}", f"unknown setting of the {k} controller")
+    values, sources = {}, {}
+    for name, s in spec.items():
+        where = f"{source}: settings.{name}"
+        entry = given.get(name)
+        if entry is None:
+            raise _err(where, "missing")
+        if not isinstance(entry, dict) or "value" not in entry:
+            raise _err(where, "must be a table with 'value' (and 'unit')")
+        v = entry["value"]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise _err(f"{where}.value", f"must be a finite number (got {v!r})")
+        unit = entry.get("unit", s.unit)
+        if unit != s.unit:
+            raise _err(f"{where}.unit", f"must be '{s.unit}' (got {unit!r}; values are in SI units)")
+        if not s.low <= v <= s.high:
+            raise _err(f"{where}.value", f"{v:g} {s.unit} is outside {s.low:g}..{s.high:g}")
+        values[name] = float(v)
+        sources[name] = str(entry.get("source", ""))
+    tables = data["tables"]
+    for name in ("temps_C", "pressures_Pa", "input_V", "fill_s"):
+        if name not in tables:
+            raise _err(f"{source}: tables.{name}", "missing")
+    temps = _array(f"{source}: tables.temps_C", tables["temps_C"], 1)
+    pressures = _array(f"{source}: tables.pressures_Pa", tables["pressures_Pa"], 1)
+    table = _array(f"{source}: tables.input_V", tables["input_V"], 2)
+    fill = _array(f"{source}: tables.fill_s", tables["fill_s"], 1)
+    _uniform(f"{source}: tables.temps_C", temps)
+    _uniform(f"{source}: tables.pressures_Pa", pressures)
+    if temps.size != MAP_TEMPS.size:
+        raise _err(f"{source}: tables.temps_C", f"must have {MAP_TEMPS.size} temperatures (got {temps.size})")
+    if table.shape != (temps.size, pressures.size):
+        raise _err(f"{source}: tables.input_V", f"must be {temps.size} x {pressures.size} (temps_C x pressures_Pa), "
+                   f"got {table.shape[0]} x {table.shape[1]}")
+    if fill.shape != temps.shape or np.any(fill < 0):
+        raise _err(f"{source}: tables.fill_s", f"must be {temps.size} non-negative times, one per temperature")
+    try:
+        plant = load_params(None, flatten(data["plant"]))
+    except ParameterError as e:
+        raise _err(f"{source}: [plant]", str(e)) from None
+    for key, name in (("source", "input_V"), ("fill_source", "fill_s")):
+        if tables.get(key):
+            sources[name] = str(tables[key])
+    return Design(k, plant, values, sources, temps, pressures, table, fill)
+
+
+def load(path: str | Path, kind: str | None = None) -> Design:
+    """The design in controller file ``path`` (see :func:`loads`)."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as e:
+        raise ControllerFileError(f"cannot read controller file '{path}': {e.strerror}") from None
+    return loads(text, str(path), kind)

@@ -1,0 +1,165 @@
+"""Designs of a plant, controller files, verification ranges: closed forms, round trips, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from wetclutch.errors import WetclutchError
+from wetclutch.launch import design as designs
+from wetclutch.launch import ranges
+from wetclutch.launch import settings as files
+from wetclutch.params import Params, load
+from wetclutch.physics import friction
+
+
+@pytest.fixture(scope="module")
+def plant():
+    return load(overrides={"hydraulics.p_prestress": 0.7e5, "driveline.ratio": 0.7, "friction.mu_scale": 1.1})
+
+
+@pytest.fixture(scope="module", params=["launch", "baseline"])
+def design(request, plant):
+    return designs.design(plant, request.param, {"driveline.ratio": "identified"})
+
+
+def test_the_design_takes_the_plants_kiss_point_ratio_and_friction(plant):
+    d = designs.design(plant, "launch", {"hydraulics.p_prestress": "identified"})
+    h = plant.hydraulics
+    assert d.settings["p_kiss"] == pytest.approx(h.p_prestress + h.k_reset * h.x_contact / h.A_p)
+    assert d.settings["ratio"] == 0.7
+    assert d.settings["mu0"] == pytest.approx(2.6e-2 * 1.1)
+    assert "identified" in d.sources["p_kiss"] and "default" in d.sources["p_kiss"]
+
+
+def test_friction_curve_slope_turns_about_the_reference_slip():
+    poly = [-1.7e-6, 2.7e-4, 2.6e-2]
+    for slope in (0.5, 1.0, 1.5):
+        c = friction.curve(poly, 1.2, slope, 75.0)
+        assert np.polyval(c, 75.0) == pytest.approx(1.2 * np.polyval(poly, 75.0))
+        # the change of mu with slip scales with the slope
+        assert np.polyval(c, 150.0) - np.polyval(c, 0.0) == pytest.approx(
+            1.2 * slope * (np.polyval(poly, 150.0) - np.polyval(poly, 0.0)))
+    np.testing.assert_array_equal(friction.curve(poly, 1.0, 1.0, 75.0), np.array(poly))
+
+
+def test_two_point_fit_recovers_a_first_order_plus_dead_time_step():
+    t = np.arange(0.0, 2.0, 1e-4)
+    k, tau, theta, t0 = 40.0, 0.03, 0.012, 1.0
+    s = np.maximum(t - t0 - theta, 0.0)
+    y = 5.0 + k * (1.0 - np.exp(-s / tau))
+    rise, tau_f, theta_f = designs.step_fit(t, y, t0)
+    assert rise == pytest.approx(k, rel=1e-4)
+    assert tau_f == pytest.approx(tau, abs=3e-4) and theta_f == pytest.approx(theta, abs=3e-4)
+
+
+def test_a_controller_file_round_trips_bit_for_bit(design):
+    back = files.loads(files.to_toml(design))
+    assert back.kind == design.kind and back.plant == design.plant and back.settings == design.settings
+    np.testing.assert_array_equal(designs.record(back), designs.record(design))
+    assert back.sources == design.sources
+
+
+def _edit(text: str, old: str, new: str) -> str:
+    assert old in text, old
+    return text.replace(old, new, 1)
+
+
+@pytest.mark.parametrize(("change", "fragment"), [
+    (lambda t: _edit(t, 'kind = "launch"', 'kind = "fuzzy"'), "kind"),
+    (lambda t: _edit(t, "[settings.hold_offset]", "[settings.hold_offsett]"), "settings.hold_offsett"),
+    (lambda t: _edit(t, '[settings.ki_t]\nvalue = 8.0\nunit = "1/s"', '[settings.ki_t]\nvalue = 8.0\nunit = "1/min"'),
+     "settings.ki_t.unit"),
+    (lambda t: _edit(t, '[settings.ki_t]\nvalue = 8.0', '[settings.ki_t]\nvalue = -8.0'), "settings.ki_t.value"),
+    (lambda t: _edit(t, '[settings.ki_t]\nvalue = 8.0', '[settings.ki_t]\nvalue = "fast"'), "settings.ki_t.value"),
+    (lambda t: _edit(t, "temps_C = [", "temps_C = [10.0, "), "tables.temps_C"),
+    (lambda t: _edit(t, "[plant.driveline]", "[plant.driveline]\nwarp = 9"), "plant"),
+    (lambda t: t + "\n[extra]\na = 1\n", "unknown section 'extra'"),
+    (lambda t: t[: len(t) // 2] + "= =", "TOML"),
+])
+def test_bad_controller_files_are_one_line_errors_naming_the_field(change, fragment):
+    text = files.to_toml(designs.cached(Params(), "launch"))
+    with pytest.raises(files.ControllerFileError) as e:
+        files.loads(change(text), "c.toml")
+    msg = str(e.value)
+    assert fragment in msg and "\n" not in msg
+
+
+def test_a_controller_file_of_another_kind_is_refused():
+    text = files.to_toml(designs.cached(Params(), "baseline"))
+    with pytest.raises(files.ControllerFileError, match="baseline controller, but a launch controller"):
+        files.loads(text, "b.toml", "launch")
+
+
+# ---------------------------------------------------------------- ranges
+
+
+def test_the_shipped_ranges_cover_what_drifts():
+    rs = {r.name: r for r in ranges.load()}
+    assert rs["kiss_point"].how == "offset" and rs["kiss_point"].high == pytest.approx(0.3e5)
+    assert (rs["fill_volume"].low, rs["fill_volume"].high) == (0.7, 1.3)
+    assert (rs["oil_temp"].low, rs["oil_temp"].high) == (10.0, 100.0)
+    assert rs["output_inertia"].high == 10.0 and (rs["cvt_ratio"].low, rs["cvt_ratio"].high) == (0.4, 1.0)
+    assert rs["request"].low == 25.0 and rs["request"].high == 200.0
+    ranges.check(list(rs.values()), Params())
+
+
+def test_ranges_apply_relative_offset_and_absolute_values(plant):
+    rs = ranges.parse({"a": {"target": "driveline.J_1", "how": "rel", "low": 1, "high": 10},
+                       "b": {"target": "hydraulics.p_prestress", "how": "offset", "low": -0.3e5, "high": 0.3e5},
+                       "c": {"target": "driveline.ratio", "low": 0.4, "high": 1.0},
+                       "d": {"target": "oil_temp_C", "low": 10, "high": 100, "dist": "normal"}})
+    p, cond = ranges.apply(rs, {"a": 3.0, "b": -0.1e5, "c": 0.9, "d": 33.0}, plant)
+    assert p.driveline.J_1 == pytest.approx(3 * plant.driveline.J_1)
+    assert p.hydraulics.p_prestress == pytest.approx(plant.hydraulics.p_prestress - 0.1e5)
+    assert p.driveline.ratio == 0.9 and cond == {"oil_temp_C": 33.0}
+    v = np.array([rs[3].draw(np.random.default_rng(i)) for i in range(2000)])
+    assert v.min() >= 10 and v.max() <= 100 and abs(v.mean() - 55) < 1.5 and 20 < v.std() < 23  # truncated at 2 sigma
+
+
+@pytest.mark.parametrize(("data", "fragment"), [
+    ({"x": {"target": "driveline.warp", "low": 0, "high": 1}}, "[x].target"),
+    ({"x": {"target": "driveline.ratio", "low": 2, "high": 1}}, "[x].low"),
+    ({"x": {"target": "driveline.ratio", "low": 0.4}}, "missing key 'high'"),
+    ({"x": {"target": "driveline.ratio", "how": "times", "low": 0, "high": 1}}, "[x].how"),
+    ({"x": {"target": "oil_temp_C", "how": "rel", "low": 0, "high": 1}}, "absolute values only"),
+    ({"x": {"target": "driveline.ratio", "low": 0, "high": 1, "colour": "red"}}, "unknown key 'colour'"),
+    ({"x": {"target": "driveline.ratio", "low": 0.4, "high": 1, "dist": "cauchy"}}, "[x].dist"),
+    ({"x": {"target": "driveline.ratio", "low": 0.4, "high": 1, "corner": "yes"}}, "[x].corner"),
+    ({"x": {"target": "driveline.ratio", "low": 0.4, "high": 1},
+      "y": {"target": "driveline.ratio", "low": 0.5, "high": 1}}, "varied by two ranges"),
+    ({"x": 3}, "[x]"),
+    ({}, "no ranges"),
+])
+def test_bad_ranges_are_one_line_errors_naming_the_range(data, fragment):
+    with pytest.raises(ranges.RangesError) as e:
+        ranges.parse(data, "r.toml")
+    assert fragment in str(e.value) and "\n" not in str(e.value)
+
+
+def test_ranges_that_leave_the_physical_range_are_refused_up_front():
+    rs = ranges.parse({"kiss": {"target": "hydraulics.p_prestress", "how": "offset", "low": -1e5, "high": 0.0}})
+    with pytest.raises(ranges.RangesError, match=r"\[kiss\] at -100000"):
+        ranges.check(rs, Params())
+
+
+_value = st.one_of(st.floats(allow_nan=True), st.integers(-5, 5), st.text(max_size=5), st.booleans(),
+                   st.lists(st.integers(), max_size=2))
+
+
+_entry = st.dictionaries(
+    st.sampled_from(["target", "how", "dist", "low", "high", "corner", "unit", "zz"]),
+    st.one_of(_value, st.sampled_from(["driveline.ratio", "oil_temp_C", "rel", "abs", "normal", "uniform"])))
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.dictionaries(st.text(min_size=1, max_size=8), st.one_of(_value, _entry), max_size=3))
+def test_any_ranges_table_parses_or_gives_one_line(data):
+    try:
+        out = ranges.parse(data, "r.toml")
+    except WetclutchError as e:
+        assert "\n" not in str(e)
+    else:
+        assert all(r.low <= r.high for r in out)
