@@ -22,33 +22,36 @@ def _release_times(tr, clutch: str) -> np.ndarray:
     return ev[:, 0]
 
 
-def test_parallel_clutches_break_away_at_their_combined_capacity():
-    # a driven by k t, b free: the pair passes T Jb / (Ja + Jb); two clutches of 2 and 5 N m
-    # hold it until that reaches 7 N m (least norm would load each with half: the 2 N m one
-    # lets go first and the 5 N m one takes the rest)
-    Ja, Jb, k, C1, C2 = 1.0, 3.0, 10.0, 2.0, 5.0
+@pytest.mark.parametrize("caps", [(2.0, 5.0), (1.0, 2.0, 10.0)])
+def test_parallel_clutches_break_away_at_their_combined_capacity(caps):
+    # a driven by k t, b free: the pair passes T Jb / (Ja + Jb); clutches of 2 and 5 N m (or three)
+    # hold it until that reaches their sum (least norm would load each alike: the weakest lets go
+    # first, carrying its sliding torque, and the others take the rest)
+    Ja, Jb, k = 1.0, 3.0, 10.0
     net = Network()
     a = net.body("a", Ja)
     b = net.body("b", Jb)
     net.source("drive", a, Ramp(0.0, 10.0, 0.0, 10.0 * k))
-    net.clutch("c1", a, b, C1)
-    net.clutch("c2", a, b, C2)
-    t_end = 1.5
+    for i, c in enumerate(caps):
+        net.clutch(f"c{i + 1}", a, b, c)
+    C = sum(caps)
+    t_end = 3.0
     tr = integrate(net, t_end, dt_out=1e-3)
-    t_break = (C1 + C2) * (Ja + Jb) / (Jb * k)
-    assert _release_times(tr, "c2")[0] == pytest.approx(t_break, abs=1e-9)
-    # while held: no slip, and the two torques add up to what the pair passes
+    t_break = C * (Ja + Jb) / (Jb * k)
+    last = f"c{len(caps)}"
+    assert _release_times(tr, last)[0] == pytest.approx(t_break, abs=1e-9)
+    # while held: no slip, and the torques add up to what the pair passes, each within its capacity
     held = tr.t < t_break - 1e-6
     assert np.max(np.abs(tr.speed("a")[held] - tr.speed("b")[held])) < 1e-9
-    total = tr.clutch_torque("c1") + tr.clutch_torque("c2")
+    total = sum(tr.clutch_torque(f"c{i + 1}") for i in range(len(caps)))
     np.testing.assert_allclose(total[held], k * tr.t[held] * Jb / (Ja + Jb), rtol=1e-9, atol=1e-9)
-    assert np.all(np.abs(tr.clutch_torque("c1")[held]) <= C1 + 1e-9)
-    assert np.all(np.abs(tr.clutch_torque("c2")[held]) <= C2 + 1e-9)
-    # after: a sees k t - 7, b sees +7
+    for i, c in enumerate(caps):
+        assert np.all(np.abs(tr.clutch_torque(f"c{i + 1}")[held]) <= c + 1e-9)
+    # after: a sees k t - C, b sees +C
     w_common = k * t_break**2 / 2.0 / (Ja + Jb)
     dt = t_end - t_break
-    wa = w_common + (k * (t_end**2 - t_break**2) / 2.0 - (C1 + C2) * dt) / Ja
-    wb = w_common + (C1 + C2) * dt / Jb
+    wa = w_common + (k * (t_end**2 - t_break**2) / 2.0 - C * dt) / Ja
+    wb = w_common + C * dt / Jb
     assert tr.speed("a")[-1] == pytest.approx(wa, rel=1e-8)
     assert tr.speed("b")[-1] == pytest.approx(wb, rel=1e-8)
     assert tr.energy_residual() < 1e-9
