@@ -92,21 +92,24 @@ def test_brakes_on_both_sides_of_a_gear_stop_it_and_hold_it(T_hold, moves):
     assert tr.energy_residual() < 1e-9
 
 
-def test_brakes_on_either_side_of_a_gear_at_rest_break_away_together():
-    # at rest from the start: the ramp k t on body 1 must overcome B1 + r B2 (ratio 0.3, which
-    # is no binary fraction: the constraint matrix is singular only up to rounding)
+@pytest.mark.parametrize("eta", [1.0, 0.8])
+def test_brakes_on_either_side_of_a_gear_at_rest_break_away_together(eta):
+    # at rest from the start: the ramp k t on body 1 must overcome B1 + r B2 / eta (forward power
+    # flow through the gear; ratio 0.3, which is no binary fraction: the constraint matrix is
+    # singular only up to rounding); then (J1 + r^2 J2 / eta) w' = k t - B1 - r B2 / eta
     J1, J2, r, B1, B2, k = 1.0, 5.0, 0.3, 2.0, 10.0, 4.0
     net = Network()
     b1 = net.body("b1", J1)
     b2 = net.body("b2", J2)
-    net.gear("g", b1, b2, r)
+    net.gear("g", b1, b2, r, eta)
     net.brake("brake1", b1, B1)
     net.brake("brake2", b2, B2)
     net.source("drive", b1, Ramp(0.0, 10.0, 0.0, 10.0 * k))
     tr = integrate(net, 2.0)
-    t_break = (B1 + r * B2) / k
+    t_break = (B1 + r * B2 / eta) / k
     assert _release_times(tr, "brake2")[0] == pytest.approx(t_break, abs=1e-9)
-    J_eq = J1 + r * r * J2
+    assert np.all(tr.speed("b1")[tr.t < t_break] == 0.0)
+    J_eq = J1 + r * r * J2 / eta
     assert tr.speed("b1")[-1] == pytest.approx(k * (2.0 - t_break) ** 2 / 2.0 / J_eq, rel=1e-8)
     assert tr.energy_residual() < 1e-9
 
