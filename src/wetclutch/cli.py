@@ -36,6 +36,12 @@ def _param_args(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _scheduler_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run the launches on this dask.distributed scheduler, e.g. tcp://10.0.0.5:8786 "
+                        "(default: $DASK_SCHEDULER_ADDRESS; neither: local processes)")
+
+
 def _load_params(args: argparse.Namespace) -> params_mod.Params:
     overrides = dict(params_mod.parse_set(s) for s in args.sets)
     return params_mod.load(args.param_file, overrides)
@@ -194,7 +200,8 @@ def _cmd_verify(args: argparse.Namespace) -> None:
     rs = ranges.load(args.ranges)
     d = _design(args, p, origin)
     res = verify.run(d, p, args.samples, args.seed, args.workers, rs, progress=not args.quiet,
-                     replay_args=_replay_args(args, "controller.toml"), sequence=args.sequence)
+                     replay_args=_replay_args(args, "controller.toml"), sequence=args.sequence,
+                     scheduler=args.scheduler)
     verify_report.write(res, args.out, d)
     seq = (f"; after {args.sequence} launches of each clutch (first launch {100 * res['pass_rate_first_launch']:.1f} %,"
            f" {res['slams']} slams)" if args.sequence > 1 else "")
@@ -215,11 +222,12 @@ def _cmd_report(args: argparse.Namespace) -> None:
          else _design(args, p, origin, "baseline"))
     job = campaign.main_job(p, d, b, rs, args.samples, args.baseline_samples, args.seed, args.workers,
                             progress=not args.quiet, replay_args=_replay_args(args, "controller.toml"),
-                            baseline_replay_args=_replay_args(args, "baseline.toml"))
+                            baseline_replay_args=_replay_args(args, "baseline.toml"), scheduler=args.scheduler,
+                            sequence=args.sequence)
     s = report.write(job, args.out)
     same = s["same_samples"]
     print(f"report: launch controller meets all requirements in {100 * s['verify']['pass_rate']:.1f} % of "
-          f"{s['verify']['cases']} launches; on the same {same['samples']}: design {100 * same['design']:.1f} %, "
+          f"{s['verify']['cases']} clutches ({args.sequence} launches each, judged on the last); on the same {same['samples']}: design {100 * same['design']:.1f} %, "
           f"baseline {100 * same['baseline']:.1f} % -> {args.out}/report.md")
 
 
@@ -313,6 +321,7 @@ def build_parser() -> argparse.ArgumentParser:
     ver.add_argument("--samples", type=int, default=1000, metavar="N", help="random samples (default 1000; plus corners)")
     ver.add_argument("--seed", type=int, default=0, metavar="S")
     ver.add_argument("--workers", type=int, metavar="W", help="processes (default: all cores)")
+    _scheduler_arg(ver)
     ver.add_argument("--ranges", metavar="R.toml", help="what varies and how (default: the shipped ranges file)")
     ver.add_argument("--sequence", type=int, default=1, metavar="N",
                      help="launches per sample, the adaptation carried over; judged on the last (default 1)")
@@ -328,7 +337,10 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--baseline-samples", type=int, default=200, metavar="N")
     rep.add_argument("--seed", type=int, default=0, metavar="S")
     rep.add_argument("--workers", type=int, metavar="W")
+    _scheduler_arg(rep)
     rep.add_argument("--ranges", metavar="R.toml", help="what varies and how (default: the shipped ranges file)")
+    rep.add_argument("--sequence", type=int, default=3, metavar="N",
+                     help="launches per verified clutch, the adaptation carried over; judged on the last (default 3)")
     rep.add_argument("--controller-file", metavar="C.toml", help="the launch controller (default: designed on the plant)")
     rep.add_argument("--baseline-file", metavar="B.toml", help="the baseline (default: designed on the plant)")
     _param_args(rep)

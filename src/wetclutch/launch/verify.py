@@ -15,6 +15,7 @@ metric percentiles, the worst cases and every sample.
 
 from __future__ import annotations
 
+import functools
 import os
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
@@ -24,6 +25,7 @@ import numpy as np
 
 from ..errors import WetclutchError
 from ..params import Params
+from . import distributed
 from . import loop as launch
 from . import metrics
 from . import ranges as ranges_mod
@@ -140,6 +142,11 @@ def _worker(sample: Sample) -> dict[str, Any]:
     return run_sample(_SHARED[0], sample, _SHARED[1])
 
 
+def _warm(one: Any, sample: Sample) -> None:
+    """Compile the closed loop on this process, or load it from the numba cache (a sweep's workers)."""
+    one(sample)
+
+
 def check_options(n: int, seed: int, workers: int | None, samples_option: str = "--samples") -> None:
     """Refuse a bad sample count, seed or worker count (one-line errors naming the option)."""
     if n < 0:
@@ -152,7 +159,8 @@ def check_options(n: int, seed: int, workers: int | None, samples_option: str = 
 
 def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 0, workers: int | None = None,
         ranges: list[ranges_mod.Range] | None = None, corners: bool = True, profile: str = "step",
-        progress: bool = True, replay_args: str = "", sequence: int = 1) -> dict[str, Any]:
+        progress: bool = True, replay_args: str = "", sequence: int = 1,
+        scheduler: str | None = None) -> dict[str, Any]:
     """Verify ``design`` on ``n`` random samples (plus corners) around ``plant``; returns the ``verify.json`` content.
 
     Parameters
@@ -167,6 +175,10 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
         Options every replay command carries (e.g. `` --param-file F --controller-file C``).
     sequence
         Launches per sample, the adaptation carried over (see :func:`run_sample`).
+    scheduler
+        A ``dask.distributed`` scheduler to run the samples on (default ``$DASK_SCHEDULER_ADDRESS``;
+        neither: local processes); the result is the same bit for bit
+        (:mod:`wetclutch.launch.distributed`).
     """
     global _SHARED
     check_options(n, seed, workers)
@@ -186,7 +198,12 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
             TimeElapsedColumn(), TimeRemainingColumn())
     with Progress(*cols, disable=not progress, transient=False) as bar:
         task = bar.add_task("verify", total=len(cases), ctrl=design.kind)
-        if workers == 1 or len(cases) < 2:
+        address = distributed.scheduler_address(scheduler)
+        if address is not None and cases:
+            one = functools.partial(run_sample, ctx, grid=_SHARED[1])
+            results = distributed.map_batches(one, cases, address, warm=functools.partial(_warm, one, cases[0]),
+                                              on_batch=lambda k: bar.advance(task, k))
+        elif workers == 1 or len(cases) < 2:
             for c in cases:
                 results.append(_worker(c))
                 bar.advance(task)

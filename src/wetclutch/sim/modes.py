@@ -13,7 +13,7 @@ import numpy as np
 
 from .compiled import jit, jit_inline
 from .rhs import capacity, hold_margins, poly, rhs, slip
-from .workspace import FREE, LOCKED, NO_MODE, STUCK, aux_offsets
+from .workspace import FREE, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets
 
 
 @jit_inline
@@ -56,7 +56,10 @@ def _first_guess(t, x, net, ext, clm, grm):
         cap = max(capacity(j, t, False, x, net, ext), capacity(j, t_right, False, x, net, ext))
         s = slip(x, net, j)
         scale = max(1.0, abs(x[a]), abs(x[b]) if b >= 0 else 0.0)
-        if cap <= 0.0:
+        if net.cl_oneway[j] != 0:
+            # a one-way clutch is never free: b overruns a, or it is locked
+            clm[j] = -1 if s < -1e-8 * scale else LOCKED
+        elif cap <= 0.0:
             clm[j] = FREE
         elif abs(s) <= 1e-8 * scale:
             clm[j] = LOCKED
@@ -132,14 +135,24 @@ def _gear_modes(x, dx, aux, net, grm, released):
 @jit_inline
 def _release_worst(aux, net, clm, released):
     """Release the locked clutch most beyond its static capacity; True if one was. The test is the
-    event function itself, so a clutch kept locked starts with g >= 0."""
+    event function itself, so a clutch kept locked starts with g >= 0.
+
+    Of several locks on one body (a redundant set, whose torques are the least-norm
+    distribution), the one released carries its sliding torque from then on and the others
+    the rest: the set lets go only when no distribution keeps every lock within its limit.
+    A one-way clutch is limited only in the direction in which b overruns a."""
     nc = net.cl_a.shape[0]
     worst = -1
     worst_excess = 0.0
     for j in range(nc):
         if clm[j] == LOCKED:
-            lim = net.cl_peak[j] * aux[nc + j] * poly(net.cl_poly, j, 0.0)
-            if lim - abs(aux[j]) < 0.0:
+            if net.cl_oneway[j] != 0:
+                lim = net.cl_peak[j] * max(aux[nc + j], 0.0) * poly(net.cl_poly, j, 0.0)
+                over = -aux[j] - lim
+            else:
+                lim = net.cl_peak[j] * aux[nc + j] * poly(net.cl_poly, j, 0.0)
+                over = abs(aux[j]) - lim
+            if over > 0.0:
                 excess = abs(aux[j]) / lim if lim > 0.0 else np.inf
                 if excess > worst_excess:
                     worst_excess = excess
@@ -184,12 +197,24 @@ def settle(t, net, ext, ws):
     _first_guess(t, x, net, ext, clm, grm)
     # a clutch or gear released in this settle must not be re-locked (no cycling)
     released[:] = 0
+    redundant = False
     for _ in range(4 * (nc + ng) + 4):
         _project(x, net, clm, grm)
         if not rhs(t, False, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm)):
             forget(ws.fact)
             return False
+        if ws.istate[IS_REDUNDANT] != 0:
+            redundant = True
+            # redundant locks: the clutches and brakes give way (carry their sliding torque) before
+            # a stuck gear, whose share of the least-norm distribution may lie outside its bounds
+            # while another distribution keeps it inside
+            if _release_worst(ws.aux, net, clm, released):
+                continue
         if _gear_modes(x, ws.dx, ws.aux, net, grm, released):
+            if redundant:
+                # a gear at its bound changes the shares: a clutch that gave way may hold again
+                for j in range(nc):
+                    released[j] = 0
             continue
         if _release_worst(ws.aux, net, clm, released):
             continue

@@ -46,6 +46,7 @@ class NetArrays(NamedTuple):
     cl_sig: np.ndarray  # (nc,) int signal index of the capacity
     cl_peak: np.ndarray  # (nc,) static / sliding capacity ratio
     cl_poly: np.ndarray  # (nc, P) capacity multiplier polynomial in |slip|, highest power first
+    cl_oneway: np.ndarray  # (nc,) int, 1: one-way clutch (freewheel), b may overrun a, a never overruns b
     gr_in: np.ndarray  # (ng,) int
     gr_out: np.ndarray  # (ng,) int
     gr_ratio: np.ndarray  # (ng,) w_out / w_in
@@ -78,6 +79,7 @@ class _Clutch:
     capacity: Signal
     peak: float
     mu_poly: tuple[float, ...]
+    oneway: bool = False
 
 
 @dataclass
@@ -157,6 +159,27 @@ class Network:
             raise ValueError(f"clutch {name!r}: peak must be >= 1")
         self.clutches.append(_Clutch(name, a, b, as_signal(capacity), float(peak), tuple(mu_poly)))
         return len(self.clutches) - 1
+
+    def one_way_clutch(
+        self,
+        name: str,
+        a: int,
+        b: int,
+        capacity: Signal | float = 0.0,
+        peak: float = 1.0,
+        mu_poly: tuple[float, ...] = (1.0,),
+    ) -> int:
+        """One-way clutch (freewheel in series with a friction clutch), as Modelica's ``OneWayClutch``.
+
+        Body ``b`` may overrun ``a`` (slip ``w_a - w_b < 0``), sliding with the clutch's
+        torque ``capacity(t) * poly(|slip|)`` (none with the default capacity 0: a pure
+        freewheel); ``a`` never overruns ``b``: when the slip would turn positive it locks,
+        and locked it transmits any torque that drives ``b`` forward, and up to
+        ``peak * capacity * poly(0)`` the other way before ``b`` breaks loose forward.
+        """
+        j = self.clutch(name, a, b, capacity, peak, mu_poly)
+        self.clutches[j].oneway = True
+        return j
 
     def brake(self, name: str, a: int, capacity: Signal | float, peak: float = 1.0) -> int:
         """A clutch from body ``a`` to the ground."""
@@ -263,6 +286,7 @@ class Network:
             cl_sig=ints(range(nc)),
             cl_peak=floats([c.peak for c in self.clutches]),
             cl_poly=poly,
+            cl_oneway=ints([int(c.oneway) for c in self.clutches]),
             gr_in=ints([g.a for g in self.gears]),
             gr_out=ints([g.b for g in self.gears]),
             gr_ratio=floats([g.ratio for g in self.gears]),
@@ -408,7 +432,7 @@ class Trajectory:
 
 
 _STATUS = {
-    wsp.ERR_SINGULAR: "the network has a body without inertia that nothing rigidly ties to one",
+    wsp.ERR_SINGULAR: "the motion is not determined",
     wsp.ERR_ZENO: "events pile up at one instant (Zeno behaviour); check the network",
 }
 
@@ -428,6 +452,11 @@ def failure(network: Network, ws: wsp.Workspace, status: int) -> SimulationError
     msg = _STATUS.get(status, f"integration failed (status {status})")
     if status == wsp.ERR_ZENO:
         msg += f" (at t = {ws.fstate[wsp.FS_T]:.6g} s, {_event_source(network, int(ws.istate[wsp.IS_LAST_EVENT]))})"
+    elif status == wsp.ERR_SINGULAR:
+        k = int(ws.istate[wsp.IS_BAD_BODY])
+        who = f"body {network.bodies[k].name!r}" if 0 <= k < len(network.bodies) else "a body"
+        msg = (f"{msg} at t = {ws.fstate[wsp.FS_T]:.6g} s: {who} has no inertia and no lock, gear or "
+               "other body with inertia holds it (give it an inertia, or tie it rigidly)")
     return SimulationError(msg)
 
 

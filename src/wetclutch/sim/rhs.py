@@ -24,8 +24,8 @@ from __future__ import annotations
 from ..physics import actuator as act_
 from . import signals
 from .compiled import jit_inline
-from .linalg import lu_factor, lu_solve
-from .workspace import E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, LOCKED, STUCK, aux_offsets
+from .linalg import lu_factor, lu_solve, svd_jacobi
+from .workspace import E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, IS_BAD_BODY, IS_REDUNDANT, LOCKED, STUCK, aux_offsets
 
 
 @jit_inline
@@ -149,47 +149,61 @@ def _clutch_torques(t, left, x, net, ext, clm, dx, aux, z):
 
 
 @jit_inline
-def _factor_constraints(net, clm, grm, A, piv, sol, G, n):
-    """Build and LU-factor the constraint matrix of the current modes; keep the inverse's body-torque
-    columns in ``G``. False if singular."""
+def _build_constraints(net, clm, grm, A, o, n):
+    """The constraint matrix of the current modes into rows ``o .. o + n`` of ``A``."""
     nb = net.J.shape[0]
     nc = net.cl_a.shape[0]
     ng = net.gr_in.shape[0]
     for r in range(n):
         for c in range(n):
-            A[r, c] = 0.0
+            A[o + r, c] = 0.0
     for k in range(nb):
-        A[k, k] = net.J[k]
+        A[o + k, k] = net.J[k]
     col = nb
     for j in range(nc):
         if clm[j] == LOCKED:
             a = net.cl_a[j]
             b = net.cl_b[j]
-            A[a, col] += 1.0
-            A[col, a] = 1.0
+            A[o + a, col] += 1.0
+            A[o + col, a] = 1.0
             if b >= 0:
-                A[b, col] -= 1.0
-                A[col, b] = -1.0
+                A[o + b, col] -= 1.0
+                A[o + col, b] = -1.0
             col += 1
     for g in range(ng):
         i_in = net.gr_in[g]
         i_out = net.gr_out[g]
         if abs(grm[g]) == STUCK:
             # both flanges held; the two torques are free within the friction bounds
-            A[i_out, col] -= 1.0
-            A[col, i_out] = 1.0
-            A[i_in, col + 1] -= 1.0
-            A[col + 1, i_in] = 1.0
+            A[o + i_out, col] -= 1.0
+            A[o + col, i_out] = 1.0
+            A[o + i_in, col + 1] -= 1.0
+            A[o + col + 1, i_in] = 1.0
             col += 2
             continue
         c = 1.0 / net.gr_eta[g] if grm[g] > 0 else net.gr_eta[g]
-        A[i_out, col] -= 1.0
-        A[i_in, col] += net.gr_ratio[g] * c
-        A[col, i_out] = 1.0
-        A[col, i_in] = -net.gr_ratio[g]
+        A[o + i_out, col] -= 1.0
+        A[o + i_in, col] += net.gr_ratio[g] * c
+        A[o + col, i_out] = 1.0
+        A[o + col, i_in] = -net.gr_ratio[g]
         col += 1
-    if not lu_factor(A, piv, n):
-        return False
+
+
+@jit_inline
+def _factor_constraints(net, clm, grm, A, piv, sol, G, n, istate):
+    """Build and LU-factor the constraint matrix of the current modes; keep the inverse's body-torque
+    columns in ``G``. A singular matrix (redundant locks) goes to :func:`_least_norm_constraints`.
+    False if the motion is not determined (the body in ``istate[IS_BAD_BODY]``)."""
+    nb = net.J.shape[0]
+    _build_constraints(net, clm, grm, A, 0, n)
+    scale = 0.0
+    for r in range(n):
+        for c in range(n):
+            scale = max(scale, abs(A[r, c]))
+    if not lu_factor(A, piv, n, 1e-13 * scale):
+        istate[IS_REDUNDANT] = 1
+        return _least_norm_constraints(net, clm, grm, A, G, n, istate)
+    istate[IS_REDUNDANT] = 0
     for c in range(nb):
         for r in range(n):
             sol[r] = 0.0
@@ -197,6 +211,69 @@ def _factor_constraints(net, clm, grm, A, piv, sol, G, n):
         lu_solve(A, piv, sol, n)
         for r in range(n):
             G[r, c] = sol[r]
+    _exact_zeros(G, n, nb)
+    return True
+
+
+@jit_inline
+def _exact_zeros(G, n, nb):
+    """Rounding-level entries of the solution operator to exact zeros, where the exact operator has
+    them: a body that locks hold at rest keeps its speed exactly, so no event function of an
+    element at standstill (a gear's power flow) creeps through zero by rounding."""
+    g_max = 0.0
+    for r in range(n):
+        for c in range(nb):
+            g_max = max(g_max, abs(G[r, c]))
+    for r in range(n):
+        for c in range(nb):
+            if abs(G[r, c]) <= 1e-13 * g_max:
+                G[r, c] = 0.0
+
+
+@jit_inline
+def _least_norm_constraints(net, clm, grm, A, G, n, istate):
+    """Redundant locks: the least-norm solution of the singular constraint system into ``G``.
+
+    Two locks that hold the same body (parallel clutches, a brake on either side of a gear,
+    a stuck gear and a bearing brake) make the matrix singular: the motion is still unique,
+    the constraint torques are not. The solution operator is the pseudo-inverse (from a
+    Jacobi SVD in the spare rows of ``A``), which picks, of all torque distributions that
+    give the motion, the one of least Euclidean norm. A null vector that moves a body means
+    the motion itself is undetermined (a body without inertia that nothing holds): False,
+    with that body in ``istate[IS_BAD_BODY]``.
+    """
+    nb = net.J.shape[0]
+    nm = A.shape[1]
+    o_u = nm
+    o_v = 2 * nm
+    o_s = o_v + n
+    _build_constraints(net, clm, grm, A, o_u, n)
+    svd_jacobi(A, o_u, o_v, n)
+    s_max = 0.0
+    for j in range(n):
+        s_max = max(s_max, A[o_s, j])
+    tol = 1e-11 * s_max
+    istate[IS_BAD_BODY] = -1
+    for j in range(n):
+        if A[o_s, j] <= tol:
+            worst = -1
+            w_max = 1e-8
+            for k in range(nb):
+                if abs(A[o_v + k, j]) > w_max:
+                    w_max = abs(A[o_v + k, j])
+                    worst = k
+            if worst >= 0:
+                istate[IS_BAD_BODY] = worst
+                return False
+    for c in range(nb):
+        for r in range(n):
+            acc = 0.0
+            for j in range(n):
+                sj = A[o_s, j]
+                if sj > tol:
+                    acc += A[o_v + r, j] * A[o_u + c, j] / (sj * sj)
+            G[r, c] = acc
+    _exact_zeros(G, n, nb)
     return True
 
 
@@ -267,7 +344,7 @@ def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
         if abs(grm[g]) == STUCK:
             n += 1
     if refactor:
-        if not _factor_constraints(net, clm, grm, ws.A, ws.piv, ws.sol, ws.G, n):
+        if not _factor_constraints(net, clm, grm, ws.A, ws.piv, ws.sol, ws.G, n, ws.istate):
             return False
     _solve_constraints(ws.G, z, dx, nb, n, full)
     p_gear = _constraint_torques(x, net, clm, grm, z, aux)
@@ -299,7 +376,15 @@ def events(x, aux, net, clm, grm, g):
     for j in range(nc):
         cap = aux[nc + j]
         m = clm[j]
-        if m == LOCKED:
+        if net.cl_oneway[j] != 0:
+            # one-way: locked, it holds any torque that drives b forward and its static friction
+            # backward; it slides only with b overrunning a
+            if m == LOCKED:
+                g[2 * j] = net.cl_peak[j] * max(cap, 0.0) * poly(net.cl_poly, j, 0.0) + aux[j]
+            else:
+                g[2 * j] = -slip(x, net, j)
+            g[2 * j + 1] = 1.0
+        elif m == LOCKED:
             g[2 * j] = net.cl_peak[j] * cap * poly(net.cl_poly, j, 0.0) - abs(aux[j])
             g[2 * j + 1] = cap
         elif m == FREE:

@@ -52,7 +52,9 @@ IS_EVENTS = 4  # located events
 IS_SWITCHES = 5  # clutch mode changes
 IS_N_LOG = 6  # mode changes logged (may exceed the log's length)
 IS_LAST_EVENT = 7  # event function of the last event
-N_ISTATE = 8
+IS_BAD_BODY = 8  # a body whose motion the network does not determine (-1: none)
+IS_REDUNDANT = 9  # 1: the current constraint factors are the least-norm ones of redundant locks
+N_ISTATE = 10
 
 EVENT_LOG = 4096  # rows of the mode-change log (time, clutch, new mode); later changes are counted, not logged
 
@@ -86,7 +88,8 @@ class Workspace(NamedTuple):
     aux_new: np.ndarray
     g_old: np.ndarray
     g_new: np.ndarray
-    A: np.ndarray  # LU factors of the constraint matrix for the current modes
+    A: np.ndarray  # (3 nmat + 1, nmat) LU factors of the constraint matrix for the current modes; the rows
+    # below are the SVD's scratch (U S, V, singular values) when the matrix is singular (redundant locks)
     z: np.ndarray
     piv: np.ndarray
     sol: np.ndarray  # (nmat,) scratch: one column of the inverse constraint matrix
@@ -116,7 +119,7 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
     fstate[FS_PWM_NEXT], fstate[FS_PWM_START] = -np.inf, t0
     fstate[FS_LOCKS:] = -1.0
     istate = np.zeros(N_ISTATE, dtype=np.int64)
-    istate[IS_SETTLE], istate[IS_LAST_EVENT] = 1, -1
+    istate[IS_SETTLE], istate[IS_LAST_EVENT], istate[IS_BAD_BODY] = 1, -1, -1
     return Workspace(
         x=x0.astype(np.float64).copy(),
         clm=np.full(nc, UNDECIDED, dtype=np.int64),
@@ -129,7 +132,7 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
         aux_new=np.zeros(max(naux, 1)),
         g_old=np.zeros(max(2 * nc + 2 * ng, 1)),
         g_new=np.zeros(max(2 * nc + 2 * ng, 1)),
-        A=np.zeros((max(nmat, 1), max(nmat, 1))),
+        A=np.zeros((3 * max(nmat, 1) + 1, max(nmat, 1))),
         z=np.zeros(max(nmat, 1)),
         piv=np.zeros(max(nmat, 1), dtype=np.int64),
         sol=np.zeros(max(nmat, 1)),
