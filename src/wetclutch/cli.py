@@ -124,7 +124,11 @@ def _cmd_launch(args: argparse.Namespace) -> None:
     req = ", ".join(f"{k} {'pass' if v else 'FAIL'}" for k, v in s["requirements"].items())
     fmt = lambda v, f: "-" if v is None else format(v, f)  # noqa: E731
     print(f"launch {args.controller}: ess {fmt(s['steady_state_error_pct'], '.2f')} %, t95 {fmt(s['t95_s'], '.3f')} s, "
-          f"overshoot {fmt(s['overshoot_pct'], '.1f')} %, t_sync {fmt(s['t_sync_s'], '.2f')} s; {req} -> {args.out}")
+          f"overshoot {fmt(s['overshoot_pct'], '.1f')} %, t_sync {fmt(s['t_sync_s'], '.2f')} s, "
+          f"plate {s['T_plate_peak_C']:.1f} C; {req} -> {args.out}")
+    if s["T_plate_over_limit"]:
+        print(f"warning: clutch plates reached {s['T_plate_peak_C']:.1f} C, above the limit "
+              f"thermal.T_plate_limit_C = {s['T_plate_limit_C']:g} C", file=sys.stderr)
 
 
 def _cmd_verify(args: argparse.Namespace) -> None:

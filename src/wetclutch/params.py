@@ -48,7 +48,7 @@ Valve and hydraulics, calibrated together against the study's figures (see
 * ``I_hyst`` 0.045 A: the magnet's hysteresis (a play on the coil current), about 3 % of
   the 1.4 A the valve test reaches; the up and down staircases of the valve test then
   differ by about 0.15 bar under 1 kHz PWM.
-* ``k_F1`` 8.52 N/A, ``k_F2`` 3.0 N/A^2, ``F_preload`` 0.25 N, ``I_sat`` 0.70 A (force rising
+* ``k_F1`` 8.52 N/A, ``k_F2`` 3.0 N/A^2, ``F_preload`` 0.30 N, ``I_sat`` 0.70 A (force rising
   only linearly above it: saturated iron), ``port_width`` 21.5 mm, ``overlap`` 43 um and
   ``flow_force`` 0.32 (a partly compensated spool): fitted, with the feedback chamber,
   to the whole-clutch DC curve at 85 C, the valve test's ``24 pdc - 1.38`` (the droop of
@@ -142,7 +142,7 @@ class Valve(_Section):
     pwm_freq: float = _f(1000.0, "Hz", "PWM frequency", gt=0.0, le=1e5)
     k_F1: float = _f(8.52, "N/A", "magnet force, linear coefficient (in the magnetising current I_m)", ge=0.0, le=1e4)
     k_F2: float = _f(3.0, "N/A^2", "magnet force, quadratic coefficient", ge=0.0, le=1e4)
-    F_preload: float = _f(0.25, "N", "spring preload on the stem towards opening", ge=-100.0, le=100.0)
+    F_preload: float = _f(0.30, "N", "spring preload on the stem towards opening", ge=-100.0, le=100.0)
     A_fb: float = _f(1.96e-5, "m^2", "stem area under pressure feedback", gt=0.0, le=1e-2)
     m_stem: float = _f(0.01, "kg", "moving mass of stem and armature", gt=0.0, le=10.0)
     c_stem: float = _f(4400.0, "N/m", "stem spring stiffness", gt=0.0, le=1e7)
