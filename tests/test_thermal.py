@@ -85,3 +85,26 @@ def test_ten_launches_in_a_row_heat_the_clutch():
     rise = peaks[0] - starts[0]
     assert 0.6 * seq["E_clutch"].iloc[0] / wc.load_params().thermal.C_pack < rise < seq["E_clutch"].iloc[0] / 1500.0
     assert peaks[-1] - peaks[0] > 2.0 * rise  # 10 s pauses are short against the 60 s cooling time constant
+
+
+def test_launch_reports_plate_temperature_against_its_limit():
+    from wetclutch import launch
+
+    cond = launch.Conditions(t_ref=100.0, oil_temp_C=85.0)
+    ok = launch.simulate(wc.load_params(), "launch", cond)
+    s = ok.summary
+    assert s["T_plate_peak_C"] == pytest.approx(ok.truth["T_plate"].max())
+    assert 85.0 < s["T_plate_peak_C"] < s["T_plate_limit_C"] and not s["T_plate_over_limit"]
+    # the plates took the slip energy less what the oil carried off meanwhile
+    rise = s["T_plate_peak_C"] - 85.0
+    assert 0.7 * s["slip_energy_J"] / 1500.0 < rise < s["slip_energy_J"] / 1500.0
+    hot = launch.simulate(wc.load_params(overrides={"thermal.T_plate_limit_C": 86.0}), "launch", cond)
+    assert hot.summary["T_plate_over_limit"]
+
+
+def test_rig_truth_carries_the_plate_temperature():
+    from wetclutch.rig import experiments
+
+    r = experiments.run("step", level=2.5, oil_temp_C=41.0, seed=1)
+    T = r.truth["T_plate"].to_numpy()
+    assert T[0] == pytest.approx(41.0) and T.max() > 43.0
