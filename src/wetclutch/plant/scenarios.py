@@ -160,13 +160,12 @@ def launch_sequence(params: Params | None = None, n: int = 10, pause: float = 10
     launch: plate temperature at its start, peak and end (C), and the clutch's slip energy (J).
     """
     p = params if params is not None else Params()
-    rec = thermal.pack(p, p.rig.oil_temp_C)
     t_plate = p.rig.oil_temp_C
     rows = []
     for k in range(n):
         s = driveline.summary(integrate(_engage(p, t_plate), SCENARIOS["engage"].t_end))
         rows.append({"launch": k + 1, "T_plate_start": t_plate, "T_plate_peak": s["T_plate_peak"],
                      "T_plate_end": s["T_plate_end"], "E_clutch": s["E_clutch"]})
-        rec[thermal.T_START] = s["T_plate_end"]
-        t_plate = float(thermal.closed_form(pause, 0.0, rec))
+        # the pause: no slip, the plates cool from where this launch left them
+        t_plate = float(thermal.closed_form(pause, 0.0, thermal.pack(p, p.rig.oil_temp_C, s["T_plate_end"])))
     return pd.DataFrame(rows)
