@@ -115,12 +115,24 @@ def _seal_leak(r, p):
     return 2.0 * g * p / (1.0 + math.sqrt(1.0 + 4.0 * g * g * p / (k * k)))
 
 
+def _feedback(r, p):
+    """The stem's feedback chamber: leak through orifice, guide gap and vent (m^3/s), and the chamber's pressure.
+
+    The whole path is ``p = Q/G + (Q/K)^2`` (K: the orifices in series), solved as the positive root
+    of that quadratic in Q; the chamber sits behind the damping orifice."""
+    if r[A.FB_DAMP] <= 0.0 or p <= 0.0:
+        return 0.0, p
+    g, k2 = r[A.FB_GAP], r[A.FB_TURB] ** 2
+    q = (math.sqrt(1.0 / (g * g) + 4.0 * p / k2) - 1.0 / g) * k2 / 2.0
+    return q, p - (q / r[A.FB_DAMP]) ** 2
+
+
 def _flows(r, ports, p):
     """Oil flows into and out of the clutch volume (drain port, seal leak, restriction, relief), m^3/s.
 
     ``ports``: :func:`_port_flows` at this state."""
     _, _, q_in, q_drn = ports
-    q_out = q_drn + _seal_leak(r, p) + r[A.K_RESTRICT] * math.sqrt(max(p, 0.0))
+    q_out = q_drn + _seal_leak(r, p) + _feedback(r, p)[0] + r[A.K_RESTRICT] * math.sqrt(max(p, 0.0))
     if p > r[A.P_RELIEF]:
         q_out += r[A.G_RELIEF] * (p - r[A.P_RELIEF])
     return q_in, q_out
@@ -158,7 +170,7 @@ def _stem_force(m, y, ports=None):
     o_sup, o_drn, q_in, _ = _port_flows(r, y[X], y[P]) if ports is None else ports
     dp_in = r[A.P_SUP] - y[P] - r[A.R_LINE] * q_in  # steady flow force: the jets pull the stem shut
     f_flow = r[A.K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * max(y[P], 0.0))
-    return _magnet(r, i_m) + r[A.F_PRE] - r[A.A_FB] * y[P] - f_flow - m.c * y[X]
+    return _magnet(r, i_m) + r[A.F_PRE] - r[A.A_FB] * _feedback(r, y[P])[1] - f_flow - m.c * y[X]
 
 
 def _clutch_torque(m, y, mode):

@@ -146,7 +146,8 @@ def test_magnet_force_continues_linearly_above_saturation():
     h = 1e-6
     assert (f(0.5 + h) - f(0.5)) == pytest.approx(f(0.5) - f(0.5 - h), rel=1e-4)
     assert f(1.2) - f(1.0) == pytest.approx(f(1.0) - f(0.8), rel=1e-9)
-    assert f(1.4) < rec[A.K_F1] * 1.4 + rec[A.K_F2] * 1.4**2 - 5.0  # well below the quadratic
+    # below the quadratic by exactly k_F2 (I - I_sat)^2
+    assert rec[A.K_F1] * 1.4 + rec[A.K_F2] * 1.4**2 - f(1.4) == pytest.approx(rec[A.K_F2] * 0.9**2, rel=1e-9)
 
 
 def test_magnetising_current_lags_by_the_play():
@@ -188,13 +189,47 @@ def test_seal_leak_is_a_gap_in_series_with_an_orifice():
 
 def test_turbulent_seal_leak_makes_the_static_pressure_rise_with_temperature():
     """With the seal rings' orifice the leak, lost in the viscous feed line, lowers the cold pressure most."""
-    p = wc.load_params(overrides={"hydraulics.leak_85C": 8e-10, "hydraulics.seal_orifice": 6.3e-8})
+    # without the feedback chamber, whose own trend would hide this one; a force balance near 5 bar
+    base = {"valve.fb_orifice": 0.0, "valve.F_preload": 2.0}
+    p = wc.load_params(overrides={**base, "hydraulics.leak_85C": 8e-10, "hydraulics.seal_orifice": 6.3e-8})
     cold, warm = (clutch.static_pressure(p, Step(1.0, 0.0, 0.2), pwm=True, temp_C=temp, t_end=4.0) for temp in (20.0, 85.0))
-    assert warm - cold > 1.5e5
-    # the default (laminar seal gap only): the force balance, whatever the viscosity
-    d = wc.Params()
+    assert warm - cold > 0.5e5
+    # laminar seal gap only, no feedback chamber: the force balance, whatever the viscosity
+    d = wc.load_params(overrides=base)
     cold0, warm0 = (clutch.static_pressure(d, Step(1.0, 0.0, 0.2), pwm=True, temp_C=temp, t_end=4.0) for temp in (20.0, 85.0))
     assert abs(warm0 - cold0) < 0.2e5
+
+
+def test_feedback_chamber_is_an_orifice_in_series_with_a_laminar_gap():
+    """The stem feels the outlet pressure less the damping orifice's drop at the guide's leak."""
+    rec = A.pack(wc.Params(), 85.0)
+    p = 7e5
+    q = A.feedback_flow(p, rec)
+    p_fb = A.feedback_pressure(p, q, rec)
+    assert q == pytest.approx(rec[A.FB_GAP] * p_fb, rel=1e-12)  # no vent: the gap carries p_fb to the tank
+    assert p - p_fb == pytest.approx((q / rec[A.FB_DAMP]) ** 2, rel=1e-12)
+    # the leak is laminar: cold oil leaks less, so the stem feels nearly all of the outlet pressure
+    cold = A.pack(wc.Params(), 20.0)
+    assert p - A.feedback_pressure(p, A.feedback_flow(p, cold), cold) < 0.2 * (p - p_fb)
+    # small pressures feel it less (the drop grows with the square of the leak)
+    assert (1e5 - A.feedback_pressure(1e5, A.feedback_flow(1e5, rec), rec)) / 1e5 < 0.5 * (p - p_fb) / p
+
+
+def test_static_pressure_follows_the_studys_temperature_curve_linear_in_fluidity():
+    """The study: p = 4.8e-4 T^2 + 4.1e-4 T + 4.2 bar at pdc 0.2, a straight line in 1/viscosity."""
+    temps = np.array([20.0, 41.0, 60.0, 85.0])
+    study = 4.8e-4 * temps**2 + 4.1e-4 * temps + 4.2
+    fluidity = 1.0 / oil.dynamic_viscosity(temps)
+    line = np.polyval(np.polyfit(fluidity, study, 1), fluidity)
+    assert np.max(np.abs(line / study - 1.0)) < 0.003
+    sim = np.array([clutch.static_pressure(wc.Params(), Step(1.0, 0.0, 0.2), pwm=True, temp_C=t, t_end=4.0)
+                    for t in temps]) / 1e5
+    assert np.max(np.abs(sim / study - 1.0)) < 0.1
+    # without the chamber the force balance gives the same pressure cold and warm, far from the study's 7.7 bar
+    flat = wc.load_params(overrides={"valve.fb_orifice": 0.0})
+    cold, warm = (clutch.static_pressure(flat, Step(1.0, 0.0, 0.2), pwm=True, temp_C=t, t_end=4.0) / 1e5
+                  for t in (20.0, 85.0))
+    assert abs(warm - cold) < 0.2 and study[-1] - warm > 2.0
 
 
 def test_output_rows_carry_the_torques_of_their_states():

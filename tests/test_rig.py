@@ -82,7 +82,8 @@ def test_calibration_report_cli(tmp_path):
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     rep = json.loads((out / "report.json").read_text())
-    assert rep["total"] >= 8 and all("published" in f and "simulated" in f for f in rep["figures"])
+    assert rep["total"] == 10 and all("published" in f and "simulated" in f for f in rep["figures"])
+    assert rep["passed"] == 10, [f["figure"] for f in rep["figures"] if not f["pass"]]
     text = (out / "report.md").read_text()
     assert "| figure | published | simulated |" in text
-    assert (out / "curves.png").exists() and (out / "dead_times.png").exists()
+    assert (out / "figures.png").exists()

@@ -181,7 +181,11 @@ def _cmd_launch(args: argparse.Namespace) -> None:
     fmt = lambda v, f: "-" if v is None else format(v, f)  # noqa: E731
     print(f"launch {d.kind}: ess {fmt(s['steady_state_error_pct'], '.2f')} %, t95 {fmt(s['t95_s'], '.3f')} s "
           f"(settled {fmt(s['t95_settled_s'], '.3f')} s), overshoot {fmt(s['overshoot_pct'], '.1f')} %, "
-          f"creep {fmt(s['creep_Nm'], '.1f')} N m, t_sync {fmt(s['t_sync_s'], '.2f')} s; {req} -> {args.out}")
+          f"creep {fmt(s['creep_Nm'], '.1f')} N m, t_sync {fmt(s['t_sync_s'], '.2f')} s, "
+          f"plate {s['T_plate_peak_C']:.1f} C; {req} -> {args.out}")
+    if s["T_plate_over_limit"]:
+        print(f"warning: clutch plates reached {s['T_plate_peak_C']:.1f} C, above the limit "
+              f"thermal.T_plate_limit_C = {s['T_plate_limit_C']:g} C", file=sys.stderr)
 
 
 def _rates(res: dict) -> str:

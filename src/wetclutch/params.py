@@ -35,25 +35,34 @@ Default values and why (see also ``docs/model.md``, "Default parameters"):
 Valve and hydraulics, calibrated together against the study's figures (see
 :mod:`wetclutch.rig.calibration` and ``docs/model.md``):
 
+* ``fb_orifice`` 0.15 mm bore and ``fb_gap_85C`` 8.85e-13 m^3/(s Pa): the valve's pressure
+  feedback acts on the stem through a chamber fed by a damping orifice and drained by the
+  laminar clearance of the stem's guide (a 2.6 um radial gap). Warm oil leaks more through
+  the gap, the orifice drops more pressure, the stem feels less than the outlet pressure and
+  the valve settles higher. Evidence: the study's static pressure vs oil temperature at pdc
+  0.2 is a straight line in the oil's fluidity 1/viscosity within 0.2 %
+  (``p = 3.93 bar + 0.0309 bar Pa s / mu``): the rise is carried by a laminar leak. The drop
+  over the orifice grows with the square of the leak, so small pressures (the pdc 0.05 fills,
+  the kiss point) hardly feel it. The gap is fitted to that curve together with the magnet
+  below (the whole-clutch DC curve at 85 C is measured through the same feedback).
 * ``I_hyst`` 0.045 A: the magnet's hysteresis (a play on the coil current), about 3 % of
   the 1.4 A the valve test reaches; the up and down staircases of the valve test then
-  differ by about 0.13 bar under 1 kHz PWM.
-* ``k_F1`` 4.649 N/A and ``F_preload`` 0.90 N (with ``k_F2`` 20.1 N/A^2): on the rising
-  branch, ``I_m = I - I_hyst``, the force equals the hysteresis-free fit of the study's
-  whole-clutch DC curve, ``2.84 I + 20.1 I^2`` + 0.74 N (``k_F1 = 2.84 + 2 k_F2 I_hyst``;
-  ``F_preload = 0.74 + 2.84 I_hyst + k_F2 I_hyst^2`` = 0.909 N, rounded to 0.90 N; the
-  pdc 0.05 dead times hinge on this force, 0.01 N moves them by about 1 %).
-* ``I_sat`` 0.49 A: beyond it the force rises linearly (saturated iron). The whole-clutch
-  curves stay below 0.8 A; the valve test's near-linear ``24 pdc - 1.38`` up to pdc 0.35
-  (1.4 A) needs it.
-* ``x_port`` 5 mm (the magnet's working stroke) and ``flow_force`` 0.6 (a partly
-  compensated spool): the droop of the valve under the valve test's 32 l/min.
+  differ by about 0.15 bar under 1 kHz PWM.
+* ``k_F1`` 8.52 N/A, ``k_F2`` 3.0 N/A^2, ``F_preload`` 0.30 N, ``I_sat`` 0.70 A (force rising
+  only linearly above it: saturated iron), ``port_width`` 21.5 mm, ``overlap`` 43 um and
+  ``flow_force`` 0.32 (a partly compensated spool): fitted, with the feedback chamber,
+  to the whole-clutch DC curve at 85 C, the valve test's ``24 pdc - 1.38`` (the droop of
+  the pressure-reducing valve under 32 l/min), the static pressure vs oil temperature and
+  the four dead times at once (:mod:`wetclutch.rig.calibration`; the pdc 0.05 dead times
+  hinge on the force at 0.2 A, the metering edge's width on the low-duty fill).
 * ``feed_orifice`` 13.85 mm^2, ``line_length`` 1.45 m, ``x_contact`` 1.37 mm with
   ``k_reset`` 1.784e5 N/m (contact still at 0.70 bar): the clutch fill, which sets the
   dead times (0.1 s and 0.2 s at pdc 0.2, 85 and 41 C).
-* ``seal_orifice`` 0 (laminar seal leakage only): see the calibration report for why a
-  turbulent seal leak, which would give the cold end of the static pressure vs
-  temperature curve, is not used by default.
+* ``seal_orifice`` 0 (laminar seal leakage only): a turbulent seal leak lowered by the
+  viscous feed line would also make the cold pressure lower, but with the wrong shape (a
+  viscous loss falls fastest at low temperature, the study's curve rises fastest at high
+  temperature) and at the cost of the DC curve and the small-input dead times.
+* ``C_pack`` 1500 J/K, ``h_oil`` 25 W/K: see :class:`Thermal`.
 """
 
 from __future__ import annotations
@@ -131,21 +140,24 @@ class Valve(_Section):
     amp_gain: float = _f(200.0, "V/A", "current-controller gain of the DC amplifier", gt=0.0, le=1e5)
     g_current: float = _f(0.2, "A/V", "DC mode: coil current setpoint per input volt", gt=0.0, le=10.0)
     pwm_freq: float = _f(1000.0, "Hz", "PWM frequency", gt=0.0, le=1e5)
-    k_F1: float = _f(4.649, "N/A", "magnet force, linear coefficient (in the magnetising current I_m)", ge=0.0, le=1e4)
-    k_F2: float = _f(20.1, "N/A^2", "magnet force, quadratic coefficient", ge=0.0, le=1e4)
-    F_preload: float = _f(0.90, "N", "spring preload on the stem towards opening", ge=-100.0, le=100.0)
+    k_F1: float = _f(8.52, "N/A", "magnet force, linear coefficient (in the magnetising current I_m)", ge=0.0, le=1e4)
+    k_F2: float = _f(3.0, "N/A^2", "magnet force, quadratic coefficient", ge=0.0, le=1e4)
+    F_preload: float = _f(0.30, "N", "spring preload on the stem towards opening", ge=-100.0, le=100.0)
     A_fb: float = _f(1.96e-5, "m^2", "stem area under pressure feedback", gt=0.0, le=1e-2)
     m_stem: float = _f(0.01, "kg", "moving mass of stem and armature", gt=0.0, le=10.0)
     c_stem: float = _f(4400.0, "N/m", "stem spring stiffness", gt=0.0, le=1e7)
     d_stem: float = _f(60.0, "N s/m", "stem viscous damping", ge=0.0, le=1e5)
     F_friction: float = _f(0.1, "N", "stem/armature Coulomb friction (dithered out by PWM)", ge=0.0, le=100.0)
     I_hyst: float = _f(0.045, "A", "magnetic hysteresis: half-width of the play between coil and magnetising current", ge=0.0, le=1.0)
-    I_sat: float = _f(0.49, "A", "coil current above which the magnet force rises only linearly (iron saturation)", gt=0.0, le=1e3)
-    overlap: float = _f(5e-5, "m", "land overlap around the null position", ge=0.0, le=1e-2)
+    I_sat: float = _f(0.70, "A", "coil current above which the magnet force rises only linearly (iron saturation)", gt=0.0, le=1e3)
+    overlap: float = _f(4.3e-5, "m", "land overlap around the null position", ge=0.0, le=1e-2)
     x_port: float = _f(5e-3, "m", "stem travel over which a port opens fully (the magnet's working stroke)", gt=0.0, le=1e-1)
-    port_width: float = _f(0.012, "m", "circumferential width of the metering edge", gt=0.0, le=1.0)
+    port_width: float = _f(0.0215, "m", "circumferential width of the metering edge", gt=0.0, le=1.0)
     C_d: float = _f(0.65, "-", "orifice discharge coefficient", gt=0.0, le=1.0)
-    flow_force: float = _f(0.6, "-", "steady flow force coefficient: F = flow_force * 2 C_d w x dp cos(69 deg)", ge=0.0, le=5.0)
+    flow_force: float = _f(0.32, "-", "steady flow force coefficient: F = flow_force * 2 C_d w x dp cos(69 deg)", ge=0.0, le=5.0)
+    fb_orifice: float = _f(1.767e-8, "m^2", "damping orifice into the stem's feedback chamber, 0.15 mm bore (0: the stem feels the outlet pressure); with fb_gap_85C it makes the static pressure rise with oil temperature as the study measured", ge=0.0, le=1e-4)
+    fb_gap_85C: float = _f(8.85e-13, "m^3/(s Pa)", "laminar clearance of the stem's guide out of the feedback chamber at 85 C (scales with 1/viscosity; a 2.6 um radial gap, 5 mm stem, 3 mm land); fitted to the study's static pressure vs oil temperature", ge=0.0, le=1e-8)
+    fb_vent: float = _f(0.0, "m^2", "vent bore of the stem guide's leakage to the tank (0: unrestricted)", ge=0.0, le=1e-4)
 
 
 class Hydraulics(_Section):
@@ -187,6 +199,20 @@ class Friction(_Section):
     drag_20C: float = _f(0.013, "N m s", "open-clutch viscous drag coefficient at 20 C (scales with viscosity)", ge=0.0, le=10.0)
 
 
+class Thermal(_Section):
+    """Heat of the clutch pack: a lumped heat capacity cooled by the oil flowing through it."""
+
+    # 16 plates of a 0.2 m clutch: 8 steel separators (~0.25 kg) and 8 friction plates' steel
+    # cores (~0.15 kg), 3.2 kg of steel at 460 J/(kg K), plus the oil between them: ~1500 J/K
+    C_pack: float = _f(1500.0, "J/K", "heat capacity of the clutch pack (plates and the oil between them)", gt=0.0, le=1e6)
+    # a cooling flow of ~1 l/min of ATF (rho c = 1.6 MJ/(m^3 K)) carries at most 27 W/K; the
+    # plates' surfaces pass about that to it: 25 W/K, a cooling time constant C/h of 60 s
+    h_oil: float = _f(25.0, "W/K", "heat transfer from the plates to the cooling oil flow", gt=0.0, le=1e5)
+    mu_temp: float = _f(0.0, "1/K", "relative change of friction per kelvin of plate temperature (0: none, as the study found)", ge=-0.05, le=0.05)
+    T_mu_ref_C: float = _f(85.0, "C", "plate temperature at which friction has its nominal value", ge=-30.0, le=400.0)
+    T_plate_limit_C: float = _f(200.0, "C", "plate temperature above which the launch report warns (paper linings and ATF age fast above it)", gt=0.0, le=600.0)
+
+
 class Rig(_Section):
     """Conditions of an experiment on the virtual rig."""
 
@@ -203,6 +229,7 @@ class Params(_Section):
     valve: Valve = Field(default_factory=Valve)
     hydraulics: Hydraulics = Field(default_factory=Hydraulics)
     friction: Friction = Field(default_factory=Friction)
+    thermal: Thermal = Field(default_factory=Thermal)
     rig: Rig = Field(default_factory=Rig)
 
 

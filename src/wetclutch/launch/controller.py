@@ -437,7 +437,7 @@ def pack(kind: str, s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pres
     s
         The settings by name (SI; :class:`wetclutch.launch.design.LaunchDesign`): ``p_kiss``, ``a_p``,
         ``ratio``, ``eta``, ``f_knee``, ``p_max``, ``ff_shift`` and the gains of
-        :class:`wetclutch.launch.design.LaunchGains` with the dither frequencies and dip time
+        :data:`wetclutch.launch.design.SETTINGS` with the dither frequencies and dip time
         as sample counts already (``dither_half``, ``dither_half_torque``, ``dip_n``).
     mu
         The friction law's ``mu(slip)`` coefficients, highest power first, at most :data:`N_MU`.

@@ -251,6 +251,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
         "omega_s": tr.speed("s"),
         "locked": tr.locked("clutch"),
         "E_clutch": tr.dissipated("clutch"),
+        "T_plate": tr.plate_temperature(),
     })
     t_sync = tr.sync_time("clutch")
     resp = metrics.response(signals["time"].to_numpy(), signals["T_r"].to_numpy(), t_ref[:m], cond.t_request, t_sync)
@@ -258,6 +259,8 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
         nominal = nominal_response(d, cond)
     summary = metrics.summary(resp, nominal, slip_energy=float(truth["E_clutch"].iloc[-1]), t_sync=t_sync)
     summary.update(controller=d.kind, t_ref_Nm=cond.t_ref, profile=str(cond.profile), oil_temp_C=temp)
+    t_peak, limit = float(truth["T_plate"].max()), p.thermal.T_plate_limit_C
+    summary.update(T_plate_peak_C=t_peak, T_plate_limit_C=limit, T_plate_over_limit=bool(t_peak > limit))
     found = float(cs[control.CS_KISS]) if d.kind == "launch" and cs[control.CS_FOUND] else None
     kiss_start = (d.settings["p_kiss"] if start is None else start) if d.kind == "launch" else None
     summary.update(kiss_start_Pa=kiss_start, kiss_found_Pa=found)

@@ -105,8 +105,11 @@ from . import friction, oil
     I_HYST,  # half-width of the magnet's hysteresis (play on the coil current), A; 0: none
     I_SAT,  # coil current above which the magnet force rises only linearly, A
     K_SEAL,  # turbulent orifice in series with the laminar seal gap G_LEAK, m^3/(s Pa^0.5); 0: none
+    FB_DAMP,  # damping orifice into the stem's feedback chamber, m^3/(s Pa^0.5); 0: the chamber sees p
+    FB_GAP,  # laminar clearance of the stem's guide out of the feedback chamber, m^3/(s Pa)
+    FB_TURB,  # damping orifice and the guide's vent bore in series (turbulent part of the path), m^3/(s Pa^0.5)
     N_ACT,
-) = range(43)
+) = range(46)
 
 DC, PWM = 0, 1
 N_STATES = 5  # I, p, V_in, V_out, I_m: the actuator's block of the state vector, in this order
@@ -158,18 +161,46 @@ def play_rate(cur, cur_dot, i_m, r):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def seal_leak(p, act):
-    """Seal leakage (m^3/s): the laminar gap ``G_LEAK`` in series with the turbulent orifice ``K_SEAL``.
+def gap_and_orifice(p, g, k):
+    """Flow (m^3/s) through a laminar gap ``g`` in series with a turbulent orifice ``k`` (0: none) under ``p``.
 
-    ``p = Q / G + (Q / K)^2``; solved as ``Q = 2 G p / (1 + sqrt(1 + 4 G^2 p / K^2))``, which
+    ``p = Q / g + (Q / k)^2``; solved as ``Q = 2 g p / (1 + sqrt(1 + 4 g^2 p / k^2))``, which
     stays accurate when either term dominates. Cold oil: the gap (1/viscosity) limits the
     flow; warm oil: the orifice (no viscosity) does.
     """
-    g = act[G_LEAK]
-    k = act[K_SEAL]
     if k <= 0.0 or p <= 0.0:
         return g * p
     return 2.0 * g * p / (1.0 + np.sqrt(1.0 + 4.0 * g * g * p / (k * k)))
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def seal_leak(p, act):
+    """Seal leakage (m^3/s): the laminar gap ``G_LEAK`` in series with the turbulent orifice ``K_SEAL``."""
+    return gap_and_orifice(p, act[G_LEAK], act[K_SEAL])
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def feedback_flow(p, act):
+    """Flow (m^3/s) through the stem's feedback chamber: damping orifice, guide clearance, vent bore."""
+    if act[FB_DAMP] <= 0.0:
+        return 0.0
+    return gap_and_orifice(p, act[FB_GAP], act[FB_TURB])
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def feedback_pressure(p, q_fb, act):
+    """Pressure (Pa) in the stem's feedback chamber: ``p`` less the damping orifice's drop at flow ``q_fb``.
+
+    The chamber at the stem's end is fed from the valve outlet through a damping orifice and
+    leaks through the clearance of the stem's guide (laminar, 1/viscosity) and the guide's vent
+    bore to the tank. Warm oil leaks more, the orifice drops more, the stem feels less than the
+    outlet pressure and the valve settles higher: the whole clutch's static pressure rises with
+    oil temperature. The drop grows with the square of the flow, so small pressures hardly feel it.
+    """
+    if act[FB_DAMP] <= 0.0:
+        return p
+    r = q_fb * (1.0 / act[FB_DAMP])
+    return p - r * r
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
@@ -222,8 +253,9 @@ def evaluate(x, act, u, ext, dx, full=True):
         q_in = 0.5 * (np.sqrt(a2r * a2r + 4.0 * a2 * abs(dp)) - a2r)
         if dp < 0.0:
             q_in = -q_in
+    q_fb = feedback_flow(pp, act)
     if full:
-        q_out = seal_leak(p, act)  # drain, leakage and relief
+        q_out = seal_leak(p, act) + q_fb  # drain, leakage (seals, the stem's feedback chamber) and relief
         if o_drn > 0.0:
             q_out += act[CDW] * o_drn * np.sqrt(2.0 * pp / act[RHO])
         if act[K_RESTRICT] > 0.0:
@@ -241,7 +273,7 @@ def evaluate(x, act, u, ext, dx, full=True):
     # steady flow (Bernoulli) force: the jet through an open port pulls the stem towards closing
     dp_in = act[P_SUP] - p - act[R_LINE] * q_in
     f_flow = act[K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * pp)
-    f_stem = f_mag + act[F_PRE] - act[A_FB] * p - f_flow
+    f_stem = f_mag + act[F_PRE] - act[A_FB] * feedback_pressure(p, q_fb, act) - f_flow
     return f_stem, normal_force(p, act)
 
 
@@ -296,6 +328,14 @@ def pack(params: Params, temp_C: float, config: str = "clutch") -> np.ndarray:
     r[G_LEAK] = h.leak_85C * oil.dynamic_viscosity(85.0) / mu
     r[K_SEAL] = h.seal_orifice
     r[P_RELIEF], r[G_RELIEF] = h.p_relief, h.relief_conductance
+    # the stem's feedback chamber (part of the valve, so in both configurations)
+    k_orifice = v.C_d * np.sqrt(2.0 / r[RHO])
+    r[FB_DAMP] = k_orifice * v.fb_orifice
+    r[FB_GAP] = v.fb_gap_85C * oil.dynamic_viscosity(85.0) / mu
+    if v.fb_orifice > 0.0 and v.fb_vent > 0.0:  # two orifices in series: 1/K^2 = 1/K_1^2 + 1/K_2^2
+        r[FB_TURB] = k_orifice * v.fb_orifice * v.fb_vent / np.sqrt(v.fb_orifice**2 + v.fb_vent**2)
+    else:
+        r[FB_TURB] = r[FB_DAMP]
     r[F_KNEE] = params.friction.F_knee
     if config == "clutch":
         r[A_P], r[K_RESET], r[X_CONTACT] = h.A_p, h.k_reset, h.x_contact

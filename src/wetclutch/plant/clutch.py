@@ -50,15 +50,17 @@ class RigNetwork:
         return self.network.actuator_state + A.PRESSURE
 
 
-def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str = "clutch", temp_C: float | None = None) -> RigNetwork:
-    """The rig network driven by input ``u`` (V in DC mode, duty in PWM mode)."""
+def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str = "clutch", temp_C: float | None = None,
+          plate_temp_C: float | None = None) -> RigNetwork:
+    """The rig network driven by input ``u`` (V in DC mode, duty in PWM mode); the clutch's plates start at
+    ``plate_temp_C`` (the oil's if None)."""
     if config not in CONFIGS:
         raise ValueError(f"config must be one of {CONFIGS}")
     temp = params.rig.oil_temp_C if temp_C is None else float(temp_C)
     v = params.valve
     if config == "clutch":
         f = params.friction
-        net = driveline.build(params, 0.0)
+        net = driveline.build(params, 0.0, temp_C=temp, plate_temp_C=plate_temp_C)
         ci = 0  # the driveline's clutch
         net.clutches[ci].mu_poly = tuple(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_ref))
         # cold oil drags the open plates: viscous torque proportional to viscosity

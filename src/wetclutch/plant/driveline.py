@@ -22,6 +22,7 @@ import pandas as pd
 
 from ..sim.network import Network, Trajectory
 from ..params import Params
+from ..physics import thermal
 from ..sim.signals import Signal
 
 #: column -> unit of the driveline signals table
@@ -38,18 +39,25 @@ COLUMNS = {
     "slip": "rad/s",
     "T_brake": "N m",
     "brake_locked": "-",
+    "T_plate": "C",
 }
 
 
-def build(params: Params, capacity: Signal | float, road_load: Signal | float | None = None) -> Network:
-    """The driveline network with clutch capacity ``capacity(t)`` (N m) and road load (N m)."""
+def build(params: Params, capacity: Signal | float, road_load: Signal | float | None = None, *,
+          temp_C: float | None = None, plate_temp_C: float | None = None) -> Network:
+    """The driveline network with clutch capacity ``capacity(t)`` (N m) and road load (N m).
+
+    The clutch pack heats up with its slip power and is cooled by the oil at ``temp_C``
+    (``rig.oil_temp_C`` if None); its plates start at ``plate_temp_C`` (the oil's if None).
+    """
     d = params.driveline
     net = Network()
     p = net.body("p", d.J_p, w0=d.omega_p0, drag=d.b_1)
     one = net.body("1", d.J_1)
     r = net.body("r", 0.0)
     s = net.body("s", d.J_s, drag=d.b_2)
-    net.clutch("clutch", p, one, capacity, peak=params.clutch.peak)
+    ci = net.clutch("clutch", p, one, capacity, peak=params.clutch.peak)
+    net.thermal(ci, thermal.pack(params, params.rig.oil_temp_C if temp_C is None else temp_C, plate_temp_C))
     net.brake("brake", s, params.engage.T_load if road_load is None else road_load)
     net.gear("cvt", one, r, d.ratio, d.eta)
     net.spring("axle", r, s, d.k_a, d.d_a)
@@ -73,6 +81,7 @@ def frame(tr: Trajectory) -> pd.DataFrame:
             "slip": w_p - w_1,
             "T_brake": tr.clutch_torque("brake"),
             "brake_locked": tr.locked("brake"),
+            "T_plate": tr.plate_temperature(),
         }
     )
 
@@ -90,6 +99,10 @@ def summary(tr: Trajectory) -> dict:
         "E_damper": float(e["dissipated_damper"][-1]),
         "E_cvt": float(e["dissipated_gear"][-1]),
         "E_initial": float(e["kinetic"][0] + e["spring"][0]),
+        "E_heat_plates": float(e["heat_plates_clutch"][-1]),
+        "E_heat_oil": float(e["heat_oil_clutch"][-1]),
+        "T_plate_peak": float(np.max(tr.plate_temperature())),
+        "T_plate_end": float(tr.plate_temperature()[-1]),
         "energy_residual": tr.energy_residual(),
         "mode_switches": tr.stats["mode_switches"],
         "steps": tr.stats["steps"],

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ..physics import thermal
 from ..plant import driveline
 from ..errors import WetclutchError
 from ..sim.network import Network, Trajectory, integrate
@@ -62,9 +63,9 @@ class Scenario:
     description: str
 
 
-def _engage(p: Params) -> Network:
+def _engage(p: Params, plate_temp_C: float | None = None) -> Network:
     e = p.engage
-    return driveline.build(p, Ramp(e.t_start, e.t_ramp, 0.0, e.T_cap), e.T_load)
+    return driveline.build(p, Ramp(e.t_start, e.t_ramp, 0.0, e.T_cap), e.T_load, plate_temp_C=plate_temp_C)
 
 
 def coupled_clutches_network() -> Network:
@@ -148,3 +149,23 @@ def simulate(scenario: str, params: Params | None = None, t_end: float | None = 
     p = params if params is not None else Params()
     tr = integrate(sc.build(p), sc.t_end if t_end is None else float(t_end), **options)
     return Result(sc.name, sc.frame(tr), sc.summary(tr), p, tr)
+
+
+def launch_sequence(params: Params | None = None, n: int = 10, pause: float = 10.0) -> pd.DataFrame:
+    """``n`` ``engage`` launches in a row, ``pause`` seconds apart: the clutch pack's heat carries over.
+
+    Between two launches nothing slips, so the plates cool towards the oil temperature with
+    the pack's time constant ``C / h`` (:func:`wetclutch.physics.thermal.closed_form` with no
+    slip power); each launch starts at the temperature the previous one left. One row per
+    launch: plate temperature at its start, peak and end (C), and the clutch's slip energy (J).
+    """
+    p = params if params is not None else Params()
+    t_plate = p.rig.oil_temp_C
+    rows = []
+    for k in range(n):
+        s = driveline.summary(integrate(_engage(p, t_plate), SCENARIOS["engage"].t_end))
+        rows.append({"launch": k + 1, "T_plate_start": t_plate, "T_plate_peak": s["T_plate_peak"],
+                     "T_plate_end": s["T_plate_end"], "E_clutch": s["E_clutch"]})
+        # the pause: no slip, the plates cool from where this launch left them
+        t_plate = float(thermal.closed_form(pause, 0.0, thermal.pack(p, p.rig.oil_temp_C, s["T_plate_end"])))
+    return pd.DataFrame(rows)

@@ -48,35 +48,62 @@ def write(figs: list[Figure], out: str | Path) -> None:
             lines += ["", "## Why some figures are not met", ""]
             for r in failed:
                 lines += [f"**{r['figure']}.** {r['explanation']}", ""]
-        lines += ["", "![static curves](curves.png)", "", "![dead times](dead_times.png)", ""]
+        lines += ["", "Every figure against the study's, with its tolerance band:", "", "![figures](figures.png)", ""]
         (d / "report.md").write_text("\n".join(lines))
+        plot_figures(figs, d / "figures.png")
 
-        curves = [f for f in figs if f.curve]
-        fig, axes = plt.subplots(1, len(curves), figsize=(4.5 * len(curves), 3.6), squeeze=False)
-        for ax, f in zip(axes[0], curves):
-            c = f.curve
+
+def _band(f: Figure, ref):
+    """Lower and upper edge of the tolerance band around the published value(s) ``ref``."""
+    ref = np.asarray(ref, dtype=float)
+    if f.error_kind == "relative":
+        return ref * (1.0 - f.tolerance), ref * (1.0 + f.tolerance)
+    return ref - f.tolerance, ref + f.tolerance
+
+
+def plot_figures(figs: list[Figure], path: Path) -> None:
+    """One panel per figure: the study's value or curve, its tolerance band (shaded) and the model."""
+    n = len(figs)
+    cols = 4
+    rows = (n + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.3 * rows), squeeze=False)
+    for ax, f in zip(axes.flat, figs):
+        colour = "tab:green" if f.passed else "tab:red"
+        c = f.curve
+        if c and "published" in c:
             xkey = next(iter(c))
-            ax.plot(c[xkey], c["published"], "k--", label="study (fit)")
+            x = np.asarray(c[xkey])
+            lo, hi = _band(f, c["published"])
+            ax.fill_between(x, lo, hi, color="0.85", label=f"tolerance {_tol(f)}")
+            ax.plot(x, c["published"], "k--", label="study (fit)")
             for k in ("simulated", "up", "down"):
                 if k in c:
-                    ax.plot(c[xkey], c[k], "o-", ms=3, label=f"model {k}" if k != "simulated" else "model")
+                    ax.plot(x, c[k], "o-", ms=3, color=None if k != "simulated" else colour,
+                            label="model" if k == "simulated" else f"model {k}")
             ax.set_xlabel(xkey)
-            ax.set_ylabel("p [bar]")
-            ax.set_title(f.name, fontsize=8)
-            ax.grid(True, alpha=0.3)
-            ax.legend(fontsize=7)
-        fig.tight_layout()
-        fig.savefig(d / "curves.png", dpi=110)
-        plt.close(fig)
+            ax.set_ylabel(f"p [{f.unit}]")
+        elif isinstance(f.published, (int, float)):
+            lo, hi = _band(f, f.published)
+            ax.axhspan(float(lo), float(hi), color="0.85", label=f"tolerance {_tol(f)}")
+            ax.axhline(f.published, color="k", ls="--", label="study")
+            ax.plot([0.0], [f.simulated], "o", ms=8, color=colour, label="model")
+            ax.set_xticks([])
+            ax.set_ylabel(f.unit)
+        else:
+            # a qualitative figure (the hysteresis is visible): the model's value against the threshold
+            ax.axhspan(0.0, 0.02, color="0.85", label="not visible (< 0.02 bar)")
+            ax.plot([0.0], [f.simulated], "o", ms=8, color=colour, label="model")
+            ax.set_xticks([])
+            ax.set_ylabel(f"up-down difference [{f.unit}]")
+        ax.set_title(f.name, fontsize=7)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=6)
+    for ax in list(axes.flat)[n:]:
+        ax.axis("off")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
-        dts = [f for f in figs if f.name.startswith("dead time")]
-        fig, ax = plt.subplots(figsize=(6, 3.2))
-        x = np.arange(len(dts))
-        ax.bar(x - 0.2, [f.published for f in dts], 0.4, label="study")
-        ax.bar(x + 0.2, [f.simulated for f in dts], 0.4, label="model")
-        ax.set_xticks(x, [f.name.replace("dead time ", "") for f in dts], fontsize=8)
-        ax.set_ylabel("dead time [s]")
-        ax.legend()
-        fig.tight_layout()
-        fig.savefig(d / "dead_times.png", dpi=110)
-        plt.close(fig)
+
+def _tol(f: Figure) -> str:
+    return f"{100 * f.tolerance:.0f} %" if f.error_kind == "relative" else f"{f.tolerance:g} {f.unit}"

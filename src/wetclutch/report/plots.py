@@ -16,6 +16,7 @@ PANELS: dict[str, list[tuple[str, str, list[str]]]] = {
         ("Speeds", "rad/s", ["omega_p", "omega_1", "omega_r", "omega_s"]),
         ("Torques", "N m", ["T_c", "T_r"]),
         ("Clutch capacity", "N m", ["T_cap", "T_c"]),
+        ("Clutch plate temperature", "C", ["T_plate"]),
         ("Lock state", "-", ["locked", "brake_locked"]),
     ],
     "coupled-clutches": [
@@ -52,12 +53,15 @@ def plot_rig(measured: pd.DataFrame, truth: pd.DataFrame, path: Path, title: str
     panels = [("Command u", ["u"]), ("Clutch pressure [bar]", ["p_clutch"]), ("Torque T_r [N m]", ["T_r"]),
               ("Speeds [rad/s]", ["omega_p", "omega_1", "omega_s"])]
     panels = [(n, [c for c in cols if c in measured.columns]) for n, cols in panels]
+    if "T_plate" in truth.columns:
+        panels.append(("Clutch plate temperature [C]", ["T_plate"]))
     panels = [pc for pc in panels if pc[1]]
     fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.2 * len(panels) + 0.6), sharex=True, squeeze=False)
     for ax, (name, cols) in zip(axes[:, 0], panels):
         scale = 1e-5 if "bar" in name else 1.0
         for c in cols:
-            ax.plot(measured["time"], measured[c] * scale, ".", ms=1.5, alpha=0.5, label=f"{c} measured")
+            if c in measured.columns:
+                ax.plot(measured["time"], measured[c] * scale, ".", ms=1.5, alpha=0.5, label=f"{c} measured")
             ax.plot(truth["time"], truth[c] * scale, lw=1.0, label=f"{c} true")
         ax.set_title(name, fontsize=10, loc="left")
         ax.grid(True, alpha=0.3)
@@ -71,8 +75,10 @@ def plot_rig(measured: pd.DataFrame, truth: pd.DataFrame, path: Path, title: str
 
 def plot_launch(signals: pd.DataFrame, truth: pd.DataFrame, summary: dict, path: Path, extra: pd.DataFrame | None = None,
                 extra_label: str = "baseline") -> None:
-    """A launch: request and axle torque, pressure, valve input, speeds (``extra``: a second launch to compare)."""
-    fig, axes = plt.subplots(4, 1, figsize=(9, 9), sharex=True)
+    """A launch: request and axle torque, pressure, valve input, speeds, plate temperature (``extra``: a second
+    launch to compare)."""
+    heat = "T_plate" in truth.columns
+    fig, axes = plt.subplots(5 if heat else 4, 1, figsize=(9, 11 if heat else 9), sharex=True)
     t = signals["time"]
     ax = axes[0]
     ax.plot(t, signals["t_ref"], "k--", lw=1.2, label="request t_ref")
@@ -92,6 +98,11 @@ def plot_launch(signals: pd.DataFrame, truth: pd.DataFrame, summary: dict, path:
     for c in ("omega_p", "omega_1", "omega_s"):
         axes[3].plot(t, signals[c], lw=0.8, label=c)
     axes[3].set_title("Speeds [rad/s]", fontsize=10, loc="left")
+    if heat:
+        axes[4].plot(truth["time"], truth["T_plate"], lw=1.0, label="T_plate true")
+        if summary.get("T_plate_limit_C") is not None:
+            axes[4].axhline(summary["T_plate_limit_C"], color="r", ls="--", lw=0.8, label="limit")
+        axes[4].set_title("Clutch plate temperature [C]", fontsize=10, loc="left")
     for a in axes:
         a.grid(True, alpha=0.3)
         a.legend(loc="upper right", fontsize=7, ncol=2)

@@ -123,37 +123,23 @@ def run(params: Params | None = None) -> list[Figure]:
 EXPLANATIONS = {
     "valve alone": (
         "The valve test's 32 l/min restriction is met by the droop of the pressure-reducing valve: to pass the "
-        "flow the stem opens against its spring (up to about 4 mm at pdc 0.35, within the 5 mm stroke "
-        "`valve.x_port`) and against the steady flow force (`valve.flow_force` 0.6), and above 0.49 A "
-        "(`valve.I_sat`) the saturated magnet's force grows only linearly. The clutch fill is limited instead by "
-        "the clutch installation's feed restriction (`hydraulics.feed_orifice`) and feed line, which the valve "
-        "test does not have. With a 1 mm stroke the port saturates at 2.4 bar (-66 %); with the quadratic "
-        "magnet force up to 1.4 A the curve ends near the supply pressure; either change breaks this figure."
+        "flow the stem opens against its spring and the steady flow force (`valve.flow_force`) over the metering "
+        "edge (`valve.port_width`, `valve.x_port`), and above `valve.I_sat` the saturated magnet's force grows "
+        "only linearly. The clutch fill is limited instead by the clutch installation's feed restriction "
+        "(`hydraulics.feed_orifice`) and feed line, which the valve test does not have."
     ),
     "hysteresis": (
-        "The hysteresis is magnetic: a play of `valve.I_hyst` (0.045 A) between coil current and magnetisation, "
-        "which the 1 kHz PWM ripple (0.04 A peak to peak at pdc 0.2) wears down only slowly. The stem's Coulomb "
-        "friction cannot provide it: the PWM ripple dithers it out (as the study intended), so with "
-        "`valve.I_hyst = 0` the up and down staircases coincide."
+        "The hysteresis is magnetic: a play of `valve.I_hyst` between coil current and magnetisation, which the "
+        "1 kHz PWM ripple wears down only slowly. The stem's Coulomb friction cannot provide it: the PWM ripple "
+        "dithers it out (as the study intended), so with `valve.I_hyst = 0` the up and down staircases coincide."
     ),
     "temperature": (
-        "At pdc 0.2 the valve's force balance asks for about 7.7 bar at any temperature (the static pressure of a "
-        "dead-end volume does not depend on viscosity), so the model gives 7.7-7.8 bar from 20 to 85 C where the "
-        "study measured 4.4 to 7.7 bar. A lower cold pressure needs a continuous leak that the viscous feed line "
-        "turns into a pressure loss. The package has one (`hydraulics.seal_orifice`: a turbulent orifice, the seal "
-        "rings' joint gaps, in series with the laminar seal gap `hydraulics.leak_85C`), which gives the right "
-        "shape at cold: with `--set hydraulics.leak_85C=8e-10 --set hydraulics.seal_orifice=6.3e-8` the curve is "
-        "4.12, 5.35, 6.07, 6.47 bar at 20, 41, 60, 85 C (-16 %). But a leak that loses 3.8 bar in the line at 20 C "
-        "(1.5 l/min) flows 2.9 l/min at 85 C (the orifice part knows no viscosity), which still loses 0.9 bar in "
-        "the line, must pass the metering edge opened against the spring and flow force, and steals flow from a "
-        "small-input fill: the whole-clutch DC curve "
-        "drops by 21 % at 4 V, the 85 C pressure stays 16 % low and the pdc 0.05 dead time at 85 C grows by 56 %. "
-        "A smaller leak (`leak_85C=2e-10`, `seal_orifice=1e-8`) still costs the pdc 0.05 dead time (+21 %) and "
-        "the DC curve (-11 %) for a trend of only 7.0 to 7.5 bar. Beyond that, any viscous loss falls fastest at "
-        "low temperature (viscosity drops 2.3x from 20 to 41 C, 1.9x from 60 to 85 C), while the study's curve "
-        "rises slowly at first and fastest above 60 C: even a static fit of the leak and line alone, ignoring the "
-        "other figures, only just reaches it (9.3 % at worst, with twice the feed line's resistance). The "
-        "defaults therefore keep the seal leak laminar and small, and the nine other figures met."
+        "The static pressure of the dead-end clutch follows the valve's force balance, which depends on the oil "
+        "temperature only through the stem's feedback chamber: a damping orifice (`valve.fb_orifice`) feeds it, "
+        "the laminar clearance of the stem's guide (`valve.fb_gap_85C`, scaling with 1/viscosity) drains it. "
+        "Warm oil leaks more, the stem feels less than the outlet pressure and the valve settles higher. The "
+        "study's curve is a straight line in the oil's fluidity 1/viscosity (within 0.2 %), which is what such a "
+        "laminar leak gives; with `valve.fb_orifice = 0` the curve is flat at the 85 C value."
     ),
 }
 

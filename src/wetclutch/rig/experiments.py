@@ -187,6 +187,7 @@ def _truth(tr: Trajectory, rn: clutch.RigNetwork, s: Settings, u: Signal) -> pd.
             omega_1=tr.speed("1"),
             omega_r=tr.speed("r"),
             omega_s=tr.speed("s"),
+            T_plate=tr.plate_temperature(),
         )
     return pd.DataFrame(cols)
 

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..errors import SimulationError
 from ..physics import actuator as act_mod
+from ..physics import thermal as th_mod
 from . import workspace as wsp
 from .integrator import advance
 from .signals import Signal, as_signal, compile_signals
@@ -61,6 +62,7 @@ class NetArrays(NamedTuple):
     tab: np.ndarray  # (2, ntab) table samples
     bps: np.ndarray  # sorted breakpoint times
     act: np.ndarray  # flat actuator record (see wetclutch.physics.actuator), empty without one
+    th: np.ndarray  # flat thermal record of a clutch pack (see wetclutch.physics.thermal), empty without one
 
 
 @dataclass
@@ -129,6 +131,7 @@ class Network:
     springs: list[_Spring] = field(default_factory=list)
     sources: list[_Source] = field(default_factory=list)
     act: _Actuator | None = None
+    heat: tuple[int, np.ndarray] | None = None  # (clutch, thermal record)
 
     # -------------------------------------------------------------- building
     def body(self, name: str, J: float, w0: float = 0.0, drag: float = 0.0) -> int:
@@ -236,9 +239,23 @@ class Network:
             raise ValueError("a network has at most one actuator")
         self.act = _Actuator(stem, spring, clutch, as_signal(u), np.asarray(record, float), pwm, float(pwm_freq))
 
+    def thermal(self, clutch: int, record: np.ndarray) -> None:
+        """Give clutch ``clutch`` a heated pack (:mod:`wetclutch.physics.thermal`): its slip power
+        heats the plates, the oil cools them; ``record`` from :func:`wetclutch.physics.thermal.pack`."""
+        if self.heat is not None:
+            raise ValueError("a network has at most one heated clutch pack")
+        if not 0 <= clutch < len(self.clutches):
+            raise ValueError(f"thermal: clutch index {clutch} does not exist")
+        self.heat = (clutch, np.asarray(record, float))
+
     # -------------------------------------------------------------- layout
     @property
     def n_state(self) -> int:
+        return self.thermal_state + (th_mod.N_STATES if self.heat is not None else 0)
+
+    @property
+    def thermal_state(self) -> int:
+        """Index of the plate temperature in the state vector (after the actuator's states)."""
         return self.actuator_state + (act_mod.N_STATES if self.act is not None else 0)
 
     @property
@@ -271,6 +288,9 @@ class Network:
                                pwm_slot=ext.size,  # one more external slot: the PWM level
                                pwm_freq=a.pwm_freq)
             ext = np.concatenate([ext, [0.0]])
+        th = np.zeros(0)
+        if self.heat is not None:
+            th = th_mod.wire(self.heat[1], state=self.thermal_state, clutch=self.heat[0])
         nc = len(self.clutches)
         npoly = max([len(c.mu_poly) for c in self.clutches], default=1)
         poly = np.zeros((max(nc, 0), npoly))
@@ -301,10 +321,13 @@ class Network:
             tab=tab,
             bps=bps,
             act=act,
+            th=th,
         )
         x0 = np.zeros(self.n_state)
         x0[:nb] = [b.w0 for b in self.bodies]
         x0[nb : nb + len(self.springs)] = [s.phi0 for s in self.springs]
+        if self.heat is not None:
+            x0[self.thermal_state :] = th_mod.initial_states(th)
         return net, x0, ext
 
 
@@ -384,6 +407,12 @@ class Trajectory:
         """The actuator's state ``k`` (:data:`wetclutch.physics.actuator.PRESSURE` ...)."""
         return self.x[:, self.network.actuator_state + k]
 
+    def plate_temperature(self) -> np.ndarray:
+        """Temperature of the heated clutch pack's plates, C (:meth:`Network.thermal`)."""
+        if self.network.heat is None:
+            raise KeyError("the network has no heated clutch pack")
+        return self.x[:, self.network.thermal_state + th_mod.PLATE_TEMP]
+
     def first_lock(self, clutch: str) -> float | None:
         """Time the clutch first locks after sliding, or None."""
         t = self.locks[self._idx(self.network.clutches, clutch), wsp.LOCK_FIRST]
@@ -418,12 +447,23 @@ class Trajectory:
         out["dissipated_damper"] = self.x[:, e0 + nc + wsp.E_DAMPER]
         out["dissipated_gear"] = self.x[:, e0 + nc + wsp.E_GEAR]
         out["source_work"] = self.x[:, e0 + nc + wsp.E_SOURCE]
+        if net.heat is not None:
+            # where the heated clutch's dissipation went: into the plates and out with the oil
+            j, rec = net.heat
+            i0 = net.thermal_state
+            out[f"heat_plates_{net.clutches[j].name}"] = rec[th_mod.HEAT_CAP] * (self.x[:, i0 + th_mod.PLATE_TEMP]
+                                                                              - rec[th_mod.T_START])
+            out[f"heat_oil_{net.clutches[j].name}"] = self.x[:, i0 + th_mod.HEAT_OIL]
         return out
 
     def energy_residual(self) -> float:
         """Largest |stored + dissipated - initial - supplied| over the run, relative to
         the largest of the initial, stored and supplied energy."""
         e = self.energies()
+        if self.network.heat is not None:
+            # count the heated clutch's dissipation as the heat it became (plates + oil)
+            name = self.network.clutches[self.network.heat[0]].name
+            e[f"dissipated_{name}"] = e.pop(f"heat_plates_{name}") + e.pop(f"heat_oil_{name}")
         stored = e["kinetic"] + e["spring"]
         dissipated = sum(v for key, v in e.items() if key.startswith("dissipated_"))
         balance = stored + dissipated - stored[0] - e["source_work"]

@@ -22,6 +22,7 @@ product.
 from __future__ import annotations
 
 from ..physics import actuator as act_
+from ..physics import thermal as th_
 from . import signals
 from .compiled import jit_inline
 from .linalg import lu_factor, lu_solve, svd_jacobi
@@ -46,11 +47,16 @@ def poly(c, row, s):
 
 @jit_inline
 def capacity(j, t, left, x, net, ext):
-    """Torque capacity factor of clutch ``j``: its signal, or the actuator's normal force."""
+    """Torque capacity factor of clutch ``j``: its signal, or the actuator's normal force; times the
+    heated pack's friction factor."""
     if net.act.shape[0] > 0 and j == int(net.act[act_.CLUTCH]):
         f_n = act_.normal_force(x[int(net.act[act_.STATE]) + act_.PRESSURE], net.act)
-        return f_n * act_.friction_factor(f_n, net.act)
-    return signals.value(net.cl_sig[j], t, left, net.sig, net.tab, ext)
+        cap = f_n * act_.friction_factor(f_n, net.act)
+    else:
+        cap = signals.value(net.cl_sig[j], t, left, net.sig, net.tab, ext)
+    if net.th.shape[0] > 0 and j == int(net.th[th_.CLUTCH]):
+        cap *= th_.friction_factor(x, net.th)
+    return cap
 
 
 @jit_inline
@@ -339,6 +345,9 @@ def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
     p_drag, p_src, p_damp = _applied_torques(t, left, x, net, ext, dx, aux, z)
     p_src = _actuator(t, left, x, net, ext, dx, z, full, p_src)
     nlock = _clutch_torques(t, left, x, net, ext, clm, dx, aux, z)
+    if net.th.shape[0] > 0:
+        # the heated clutch's slip power (its dissipation rate, 0 while locked) heats the pack
+        th_.rates(x, net.th, dx[e0 + int(net.th[th_.CLUTCH])], dx)
     n = nb + nlock + ng
     for g in range(ng):
         if abs(grm[g]) == STUCK:
