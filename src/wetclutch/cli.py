@@ -235,6 +235,38 @@ def _cmd_report(args: argparse.Namespace) -> None:
           f"baseline {100 * same['baseline']:.1f} % -> {args.out}/report.md")
 
 
+def _cmd_tune(args: argparse.Namespace) -> None:
+    from rich.progress import Progress
+
+    from .launch import ranges, tune, verify
+    from .report import tune as tune_report
+
+    verify.check_options(args.samples, args.seed, args.workers)
+    verify.check_options(args.heldout_samples, args.heldout_seed, args.workers, "--heldout-samples")
+    if args.heldout_seed == args.seed:
+        raise WetclutchError("--heldout-seed must differ from --seed (the held-out plants must be other plants)")
+    p, origin = _plant(args)
+    rs = ranges.load(args.ranges)
+    start = _design(args, p, origin)
+    with Progress(disable=args.quiet) as bar:
+        task = bar.add_task(f"tune {start.kind}", total=args.generations)
+        res = tune.run(start, p, rs, args.samples, args.seed, args.generations, args.popsize, args.workers,
+                       args.state, on_generation=lambda g, *_: bar.update(task, completed=g))
+
+    def rate(design, n, seed):
+        return verify.run(design, p, n, seed, args.workers, rs, corners=False, progress=False)["pass_rate"]
+
+    rates = {"training": {"start": rate(start, args.samples, args.seed), "tuned": rate(res.design, args.samples, args.seed)},
+             "held-out": {"start": rate(start, args.heldout_samples, args.heldout_seed),
+                          "tuned": rate(res.design, args.heldout_samples, args.heldout_seed)}}
+    meta = {"samples": args.samples, "seed": args.seed, "heldout_samples": args.heldout_samples,
+            "heldout_seed": args.heldout_seed}
+    tune_report.write(res, rates, args.out, meta)
+    print(f"tune {start.kind}: training {100 * rates['training']['start']:.1f} -> {100 * rates['training']['tuned']:.1f} %, "
+          f"held-out {100 * rates['held-out']['start']:.1f} -> {100 * rates['held-out']['tuned']:.1f} % "
+          f"-> {args.out}/controller.toml")
+
+
 def _cmd_identify(args: argparse.Namespace) -> None:
     from rich.console import Console
     from rich.progress import Progress
@@ -350,6 +382,23 @@ def build_parser() -> argparse.ArgumentParser:
     _param_args(rep)
     rep.add_argument("--quiet", action="store_true")
     rep.set_defaults(func=_cmd_report)
+
+    tun = sub.add_parser("tune", help="tune a controller's gains against the requirements (CMA-ES over training "
+                                      "plants, verified on held-out ones): controller.toml, tune.md")
+    tun.add_argument("--out", required=True, metavar="DIR")
+    tun.add_argument("--samples", type=int, default=40, metavar="N", help="training plants (default 40)")
+    tun.add_argument("--seed", type=int, default=0, metavar="S", help="seed of the training plants")
+    tun.add_argument("--heldout-samples", type=int, default=200, metavar="N", help="held-out plants (default 200)")
+    tun.add_argument("--heldout-seed", type=int, default=1000, metavar="S")
+    tun.add_argument("--generations", type=int, default=8, metavar="G")
+    tun.add_argument("--popsize", type=int, default=8, metavar="P")
+    tun.add_argument("--state", metavar="FILE", help="save the search here after each generation; resume from it")
+    tun.add_argument("--workers", type=int, metavar="W")
+    tun.add_argument("--ranges", metavar="R.toml", help="what varies and how (default: the shipped ranges file)")
+    _controller_args(tun)
+    _param_args(tun)
+    tun.add_argument("--quiet", action="store_true")
+    tun.set_defaults(func=_cmd_tune)
 
     idf = sub.add_parser("identify", help="identify the clutch from measurement files; write identified.json, "
                                           "params.toml, report.md")

@@ -1,0 +1,139 @@
+"""Automatic tuning of a controller's gains against the requirements over a training set of plants.
+
+The search is CMA-ES (the ``cma`` package) over the logarithms of the gains that
+:data:`TUNABLE` names for each controller kind, from the design's values, each within a
+factor :data:`SPAN` of them. A candidate is scored on a training set: a verification
+(:func:`wetclutch.launch.verify.run`) of :data:`N_TRAIN` samples of the ranges with the
+training seed, no corners. The score is a tail measure, not the mean:
+
+    score = (1 - pass rate) + mean of the worst 10 % of the samples' badness
+
+where a sample's badness is its largest requirement violation, each figure over its limit
+(steady-state error, settled t95, ripple, creep, overshoot above the nominal's), so that
+the search is driven by the worst plants, not by the typical one. The tuned design is then
+verified on a held-out set drawn with another seed, beside the untuned
+one (the command line's ``tune``). Both kinds are tuned the same way, so the comparison with the baseline stays fair.
+
+The search state is saved after every generation (:func:`run` with ``state``), so a long
+run can be stopped and resumed.
+"""
+
+from __future__ import annotations
+
+import math
+import pickle
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import WetclutchError
+from ..params import Params
+from . import metrics, verify
+from .design import Design, with_settings
+from .ranges import Range
+
+#: the gains each kind's tuning searches
+TUNABLE = {"launch": ("ki_t", "kp_p", "ki_p", "tau_ref", "theta0"), "baseline": ("kp", "ki")}
+#: each gain stays within this factor of the design's value
+SPAN = 5.0
+N_TRAIN = 40
+TAIL = 0.1
+
+
+def badness(r: dict[str, Any]) -> float:
+    """A sample's largest requirement violation: each figure over its limit (1 = at the limit)."""
+    m = r["metrics"]
+    if not m or m.get("steady_state_error_pct") is None:
+        return 10.0
+    worst = max(m["steady_state_error_pct"] / metrics.REQ_ESS_PCT,
+                (m["t95_settled_s"] if m["t95_settled_s"] is not None else 10.0) / metrics.REQ_T95_S,
+                (m["ripple_pct"] or 0.0) / metrics.REQ_RIPPLE_PCT,
+                (m["creep_Nm"] or 0.0) / metrics.REQ_CREEP_NM,
+                (m["overshoot_pct"] or 0.0) / (metrics.ROBUST_OVERSHOOT + 10.0))
+    return float(min(worst, 10.0))
+
+
+def score(result: dict[str, Any]) -> float:
+    """The tail score of a verification (lower is better); see the module docstring."""
+    b = np.sort([badness(r) for r in result["results"]])[::-1]
+    k = max(1, int(math.ceil(TAIL * b.size)))
+    return float((1.0 - result["pass_rate"]) + np.mean(b[:k]))
+
+
+@dataclass
+class Tuning:
+    """A tuning run: the tuned design and the search history."""
+
+    design: Design
+    start: Design
+    names: tuple[str, ...]
+    history: list[dict[str, Any]] = field(default_factory=list)
+    best_score: float = math.inf
+    best_rate: float = float("nan")
+
+
+def _candidate(start: Design, names: tuple[str, ...], x: np.ndarray) -> Design:
+    x = np.clip(x, -math.log(SPAN), math.log(SPAN))
+    return with_settings(start, **{n: start.settings[n] * math.exp(v) for n, v in zip(names, x)})
+
+
+def run(start: Design, plant: Params | None = None, ranges: list[Range] | None = None, samples: int = N_TRAIN,
+        seed: int = 0, generations: int = 8, popsize: int = 8, workers: int | None = None,
+        state: str | Path | None = None, on_generation: Callable[[int, float, float], None] | None = None) -> Tuning:
+    """Tune ``start``'s gains (:data:`TUNABLE`) on ``samples`` training plants drawn with ``seed``.
+
+    ``state``: a file the search is saved to after each generation and resumed from if it
+    exists. ``on_generation(generation, best score, best pass rate)`` reports progress.
+    """
+    import cma
+
+    if start.kind not in TUNABLE:
+        raise WetclutchError(f"no tuning for controller '{start.kind}'")
+    if samples < 1:
+        raise WetclutchError(f"--samples must be >= 1 (got {samples})")
+    if generations < 1 or popsize < 2:
+        raise WetclutchError(f"--generations must be >= 1 and --popsize >= 2 (got {generations}, {popsize})")
+    names = TUNABLE[start.kind]
+    path = Path(state) if state is not None else None
+    if path is not None and path.is_file():
+        try:
+            es, tuning = pickle.loads(path.read_bytes())
+        except (pickle.UnpicklingError, EOFError, AttributeError, ValueError) as e:
+            raise WetclutchError(f"cannot resume from '{path}': {type(e).__name__}") from None
+        if tuning.start.key() != start.key():
+            raise WetclutchError(f"'{path}' is the state of another tuning (other design); remove it to start anew")
+    else:
+        es = cma.CMAEvolutionStrategy(np.zeros(len(names)), 0.3,
+                                      {"popsize": popsize, "seed": seed + 1, "verbose": -9,
+                                       "bounds": [-math.log(SPAN), math.log(SPAN)]})
+        tuning = Tuning(start, start, names)
+    while len(tuning.history) < generations:
+        xs = es.ask()
+        scores, rates = [], []
+        for x in xs:
+            res = verify.run(_candidate(start, names, np.asarray(x)), plant, samples, seed, workers, ranges,
+                             corners=False, progress=False)
+            scores.append(score(res))
+            rates.append(res["pass_rate"])
+        es.tell(xs, scores)
+        i = int(np.argmin(scores))
+        if scores[i] < tuning.best_score:
+            tuning.best_score, tuning.best_rate = scores[i], rates[i]
+            tuning.design = _candidate(start, names, np.asarray(xs[i]))
+        tuning.history.append({"generation": len(tuning.history) + 1, "best_score": float(min(scores)),
+                               "mean_score": float(np.mean(scores)), "best_pass_rate": float(rates[i])})
+        if path is not None:
+            tmp = path.with_suffix(path.suffix + ".tmp")
+            tmp.write_bytes(pickle.dumps((es, tuning)))
+            tmp.replace(path)
+        if on_generation is not None:
+            on_generation(len(tuning.history), tuning.best_score, tuning.best_rate)
+    sources = {n: f"tuned: CMA-ES on {samples} training plants (seed {seed}), tail score {tuning.best_score:.3f}"
+               for n in names}
+    tuning.design = Design(tuning.design.kind, tuning.design.plant, tuning.design.settings,
+                           tuning.design.sources | sources, tuning.design.temps_C, tuning.design.pressures_Pa,
+                           tuning.design.input_V, tuning.design.fill_s)
+    return tuning

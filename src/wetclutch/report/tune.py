@@ -1,0 +1,35 @@
+"""A tuning written out: the tuned ``controller.toml``, ``tune.json`` and ``tune.md``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from ..launch.settings import to_toml
+from ..launch.tune import Tuning
+from ..output import atomic_dir, write_json
+
+
+def write(tuning: Tuning, rates: dict[str, dict[str, float]], out: str | Path, meta: dict[str, Any]) -> None:
+    """``rates``: {"training"|"held-out": {"start"|"tuned": pass rate}}; ``meta``: sample counts and seeds."""
+    t = tuning
+    with atomic_dir(out) as d:
+        (d / "controller.toml").write_text(to_toml(t.design))
+        write_json(d / "tune.json", {"kind": t.design.kind, "gains": {n: {"start": t.start.settings[n],
+                                                                          "tuned": t.design.settings[n]}
+                                                                      for n in t.names},
+                                     "history": t.history, "pass_rates": rates, **meta})
+        lines = [f"# Tuning of the {t.design.kind} controller", "",
+                 f"CMA-ES over the logarithms of {', '.join(t.names)} (each within a factor 5 of the design), scored on "
+                 f"{meta['samples']} training plants (seed {meta['seed']}) by (1 - pass rate) + the mean of the worst "
+                 f"10 % of the samples' largest requirement violation; verified on {meta['heldout_samples']} held-out "
+                 f"plants (seed {meta['heldout_seed']}).", "",
+                 "| pass rate, all requirements | designed | tuned |", "|---|---|---|"]
+        for split in ("training", "held-out"):
+            lines.append(f"| {split} | {100 * rates[split]['start']:.1f} % | {100 * rates[split]['tuned']:.1f} % |")
+        lines += ["", "| gain | designed | tuned |", "|---|---|---|"]
+        lines += [f"| {n} | {t.start.settings[n]:.4g} | {t.design.settings[n]:.4g} |" for n in t.names]
+        lines += ["", "| generation | best score | mean score | best training pass rate |", "|---|---|---|---|"]
+        lines += [f"| {h['generation']} | {h['best_score']:.3f} | {h['mean_score']:.3f} | {100 * h['best_pass_rate']:.1f} % |"
+                  for h in t.history]
+        (d / "tune.md").write_text("\n".join(lines) + "\n")

@@ -1,0 +1,44 @@
+"""Tuning: the tail score on results with known answers, a small search, stop and resume."""
+
+import numpy as np
+import pytest
+
+from wetclutch.errors import WetclutchError
+from wetclutch.launch import design as designs
+from wetclutch.launch import metrics, ranges, tune
+from wetclutch.params import Params
+
+
+def _result(ess, t95, ok):
+    return {"metrics": {"steady_state_error_pct": ess, "t95_settled_s": t95, "ripple_pct": 1.0, "creep_Nm": 2.0,
+                        "overshoot_pct": 5.0}, "all_pass": ok}
+
+
+def test_badness_is_the_largest_violation_and_the_score_its_tail():
+    r = _result(5.0, 0.3, False)
+    assert tune.badness(r) == pytest.approx(0.3 / metrics.REQ_T95_S)
+    assert tune.badness({"metrics": {}}) == 10.0
+    rows = [_result(1.0, 0.1, True)] * 18 + [_result(30.0, 0.1, False), _result(1.0, 0.8, False)]
+    res = {"results": rows, "pass_rate": 0.9}
+    # the worst 10 % of 20 samples: the two failures, 3.0 and 4.0 times their limits
+    assert tune.score(res) == pytest.approx(0.1 + np.mean([30.0 / metrics.REQ_ESS_PCT, 0.8 / metrics.REQ_T95_S]))
+
+
+SMALL = ranges.parse({"request": {"target": "t_ref", "low": 60.0, "high": 140.0},
+                      "ratio": {"target": "driveline.ratio", "low": 0.45, "high": 0.6}})
+
+
+def test_a_small_search_can_be_stopped_and_resumed(tmp_path):
+    start = designs.cached(Params(), "baseline")
+    state = tmp_path / "state.pkl"
+    one = tune.run(start, Params(), SMALL, samples=2, seed=3, generations=1, popsize=2, workers=1, state=state)
+    assert state.is_file() and len(one.history) == 1
+    both = tune.run(start, Params(), SMALL, samples=2, seed=3, generations=2, popsize=2, workers=1, state=state)
+    assert len(both.history) == 2 and both.history[0] == one.history[0]
+    assert both.best_score <= one.best_score
+    for name in tune.TUNABLE["baseline"]:
+        assert start.settings[name] / tune.SPAN <= both.design.settings[name] <= start.settings[name] * tune.SPAN
+        assert both.design.sources[name].startswith("tuned")
+    other = designs.with_settings(start, kp=start.settings["kp"] * 2)
+    with pytest.raises(WetclutchError, match="another tuning"):
+        tune.run(other, Params(), SMALL, samples=2, seed=3, generations=3, popsize=2, workers=1, state=state)
