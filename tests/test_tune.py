@@ -5,7 +5,7 @@ import pytest
 
 from wetclutch.errors import WetclutchError
 from wetclutch.launch import design as designs
-from wetclutch.launch import metrics, ranges, tune
+from wetclutch.launch import margins, metrics, ranges, tune
 from wetclutch.params import Params
 
 
@@ -42,3 +42,23 @@ def test_a_small_search_can_be_stopped_and_resumed(tmp_path):
     other = designs.with_settings(start, kp=start.settings["kp"] * 2)
     with pytest.raises(WetclutchError, match="another tuning"):
         tune.run(other, Params(), SMALL, samples=2, seed=3, generations=3, popsize=2, workers=1, state=state)
+
+
+@pytest.mark.parametrize(("tau", "theta"), [(0.01, 0.01), (0.05, 0.01), (0.02, 0.005)])
+def test_simc_tight_tuning_has_the_published_margins(tau, theta):
+    # SIMC with tau_c = theta and tau <= 8 theta cancels the lag: L(s) = e^(-theta s) / (2 theta s), whose phase
+    # crosses -180 deg at theta w = pi/2, where |L| = 1/pi (gain margin pi), and whose gain crosses 1 at
+    # w = 1/(2 theta), where the phase is -90 deg - 0.5 rad (phase margin 90 - 28.65 deg)
+    k = 80.0
+    kp = tau / (k * 2 * theta)
+    ki = kp / min(tau, 8 * theta)
+    gm, pm = margins.pi_margins(k, tau, theta, kp, ki)
+    assert gm == pytest.approx(np.pi, rel=2e-3) and pm == pytest.approx(90.0 - np.degrees(0.5), abs=0.05)
+
+
+def test_the_baseline_keeps_its_margins_over_the_corners():
+    d = designs.cached(Params(), "baseline")
+    rows = margins.over_corners(d, Params(), ranges.load())
+    assert len(rows) == 2 ** sum(r.corner for r in ranges.load())
+    # the rule never goes below SIMC's tight tuning, whose margins are the smallest
+    assert min(r["gain_margin"] for r in rows) > 2.5 and min(r["phase_margin_deg"] for r in rows) > 55.0

@@ -6,7 +6,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..params import Params
-from . import loop, verify
+from . import loop, margins, verify
+from .ranges import load as load_ranges
 from .design import Design
 from .ranges import Range
 
@@ -25,6 +26,7 @@ class MainJob:
     launches: list[tuple[loop.LaunchResult, loop.LaunchResult]]
     verify: dict[str, Any]
     verify_baseline: dict[str, Any]
+    margins: list[dict[str, Any]]
 
 
 def main_job(plant: Params, design: Design, baseline: Design, ranges: list[Range] | None = None, samples: int = 1000,
@@ -51,4 +53,5 @@ def main_job(plant: Params, design: Design, baseline: Design, ranges: list[Range
                      scheduler=scheduler, sequence=sequence)
     base = verify.run(baseline, plant, baseline_samples, seed, workers, ranges, progress=progress,
                       replay_args=baseline_replay_args, scheduler=scheduler, sequence=sequence)
-    return MainJob(plant, design, baseline, launches, ver, base)
+    rs = ranges if ranges is not None else load_ranges()
+    return MainJob(plant, design, baseline, launches, ver, base, margins.over_corners(baseline, plant, rs))

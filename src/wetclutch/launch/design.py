@@ -242,22 +242,15 @@ def step_fit(t: np.ndarray, y: np.ndarray, t_step: float) -> tuple[float, float,
     return rise, tau, max(t63 - tau, 0.0)
 
 
-def baseline_gains(params: Params, table: np.ndarray, fill: np.ndarray, hold_offset: float,
-                   dip: float, dip_time: float) -> tuple[float, float, dict[str, float]]:
-    """The baseline's PI gains by the SIMC rule on the plant's open-loop torque step.
+def torque_step(params: Params, table: np.ndarray, fill: np.ndarray, hold_offset: float, dip: float,
+                dip_time: float, temp_C: float = TUNE_TEMP_C) -> tuple[float, float, float]:
+    """First-order-plus-dead-time model ``(K, tau, theta)`` of the axle torque per volt of input on ``params``.
 
-    On the plant at :data:`TUNE_TEMP_C`, the baseline's own fill pulse, dip and hold
-    are applied and, 1 s later, an input step that the static map and the nominal
-    friction law say gives :data:`TUNE_TORQUE`; a first-order-plus-dead-time model
-    ``K e^(-theta s) / (tau s + 1)`` is fitted to the axle torque (:func:`step_fit`) and
-    the SIMC rule (Skogestad 2003), ``kp = tau / (K (tau_c + theta))``,
-    ``ki = kp / min(tau, 4 (tau_c + theta))``, with ``tau_c`` chosen so that the first-order
-    closed loop ``e^(-theta s) / (tau_c s + 1)`` reaches 95 % at :data:`BASELINE_T95`,
-    ``tau_c = (BASELINE_T95 - theta) / 3``, and never below ``theta`` (SIMC's tight choice;
-    faster than that the loop loses its margins).
-    Returns ``(kp, ki, fit)``.
+    The baseline's own fill pulse, dip and hold (through ``table``, the design's inverse
+    static map) are applied at oil temperature ``temp_C`` and, 1 s later, an input step that
+    the map and the nominal friction law say gives :data:`TUNE_TORQUE`; :func:`step_fit` of
+    the axle torque gives ``tau`` and ``theta``, its rise over the input step ``K`` (N m/V).
     """
-    temp = TUNE_TEMP_C
     p_kiss = actuator.contact_pressure(params)
     f = params.friction
     mu = float(np.polyval(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_ref), 100.0))
@@ -265,19 +258,38 @@ def baseline_gains(params: Params, table: np.ndarray, fill: np.ndarray, hold_off
     t_c = TUNE_TORQUE * d.ratio / d.eta
     f_n = friction.force_for.py_func(t_c / mu, f.F_knee)
     p_step = p_kiss + f_n / params.hydraulics.A_p
-    row = int(np.argmin(np.abs(MAP_TEMPS - temp)))
-    u_hold = float(np.interp(p_kiss + hold_offset, MAP_PRESSURES, table[row]))
-    u_step = float(np.interp(p_step, MAP_PRESSURES, table[row]))
-    t_fill = float(fill[row])
+    u_hold = float(np.interp(p_kiss + hold_offset, MAP_PRESSURES, _row(table, temp_C)))
+    u_step = float(np.interp(p_step, MAP_PRESSURES, _row(table, temp_C)))
+    t_fill = float(np.interp(temp_C, MAP_TEMPS, fill))
     t_step, t_end = 1.0, 1.6
     eps = 1e-3
+    lo, hi = INPUT_RANGE["dc"]
     tt = [0.0, t_fill, t_fill + eps, t_fill + dip_time, t_fill + dip_time + eps, t_step, t_step + eps, t_end]
-    vv = [INPUT_RANGE["dc"][1], INPUT_RANGE["dc"][1], max(u_hold - dip, INPUT_RANGE["dc"][0]),
-          max(u_hold - dip, INPUT_RANGE["dc"][0]), u_hold, u_hold, u_step, u_step]
-    rn = clutch.build(params, Table(np.array(tt), np.array(vv), kinks_are_breakpoints=True), temp_C=temp)
+    vv = [hi, hi, max(u_hold - dip, lo), max(u_hold - dip, lo), u_hold, u_hold, u_step, u_step]
+    rn = clutch.build(params, Table(np.array(tt), np.array(vv), kinks_are_breakpoints=True), temp_C=temp_C)
     tr = integrate(rn.network, t_end, dt_out=1e-3)
     rise, tau, theta = step_fit(tr.t, tr.spring_torque("axle"), t_step)
-    gain = rise / (u_step - u_hold)
+    return rise / (u_step - u_hold), tau, theta
+
+
+def _row(table: np.ndarray, temp_C: float) -> np.ndarray:
+    """The feedforward map's row at ``temp_C``, linear between the tabulated temperatures."""
+    return np.array([np.interp(temp_C, MAP_TEMPS, table[:, j]) for j in range(table.shape[1])])
+
+
+def baseline_gains(params: Params, table: np.ndarray, fill: np.ndarray, hold_offset: float,
+                   dip: float, dip_time: float) -> tuple[float, float, dict[str, float]]:
+    """The baseline's PI gains by the SIMC rule on the plant's open-loop torque step.
+
+    A first-order-plus-dead-time model ``K e^(-theta s) / (tau s + 1)`` of the axle torque
+    per volt at :data:`TUNE_TEMP_C` (:func:`torque_step`) and the SIMC rule (Skogestad 2003),
+    ``kp = tau / (K (tau_c + theta))``, ``ki = kp / min(tau, 4 (tau_c + theta))``, with
+    ``tau_c`` chosen so that the first-order closed loop ``e^(-theta s) / (tau_c s + 1)``
+    reaches 95 % at :data:`BASELINE_T95`, ``tau_c = (BASELINE_T95 - theta) / 3``, and never
+    below ``theta`` (SIMC's tight choice; faster than that the loop loses its margins).
+    Returns ``(kp, ki, fit)``.
+    """
+    gain, tau, theta = torque_step(params, table, fill, hold_offset, dip, dip_time)
     tau_c = max((BASELINE_T95 - theta) / 3.0, theta, 1e-3)
     kp = tau / (gain * (tau_c + theta))
     ki = kp / min(tau, 4.0 * (tau_c + theta))
