@@ -114,8 +114,8 @@ N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power 
 
 # --- controller state
 (CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED, CS_KISS,
- CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM) = range(18)
-N_CS = 18
+ CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF) = range(19)
+N_CS = 19
 #: samples of a calm, risen pressure (above the first ARM_P, no steep rise) before a steep rise counts as contact:
 #: the jump from empty to the reset spring's prestress at the start of the fill is not one
 ARM_N = 10
@@ -124,7 +124,8 @@ ARM_P = 0.05e5
 #: the plates' contact (the oil volume becomes a thousand times stiffer than the reset spring); the stroke, a
 #: pressure ramp of a few bar/s, stays well below it
 JUMP = 0.1e5
-#: filtered axle torque (N m) that marks the plates' first contact: the kiss point is found there
+#: rise of the filtered axle torque (N m) above its value when the fill ended that marks the plates' first
+#: contact (the open plates' oil drag, several N m in cold oil, is already there then): the kiss point is found there
 ONSET_NM = 3.0
 #: while holding without torque, the believed kiss point rises at this rate (Pa/s), at most SEARCH_SPAN above the design's
 SEARCH_RATE = 1.0e5
@@ -298,7 +299,7 @@ def _find_kiss(ctrl, cs, meas, t_ref, phase, dt):
         # crosses the threshold when that average has taken a third of JUMP of it)
         cs[CS_KISS] = cs[CS_PF] - JUMP / 3.0
         cs[CS_FOUND] = 1.0
-    elif cs[CS_TF] > ONSET_NM:
+    elif phase != FILL and cs[CS_TF] - cs[CS_TREF] > ONSET_NM:
         slip = meas[M_WP] - meas[M_WS] / ctrl[RATIO]
         cs[CS_KISS] = cs[CS_PF] - _pressure_target(ctrl, 0.0, ONSET_NM, slip, 1.0)
         cs[CS_FOUND] = 1.0
@@ -329,6 +330,7 @@ def _launch(ctrl, cs, meas, t_ref):
         phase = HOLD
         cs[CS_PSET] = p
         cs[CS_DIP] = ctrl[DIP_N]
+        cs[CS_TREF] = cs[CS_TF]
     if phase == HOLD and cs[CS_DUMPED] == 0.0 and t_ref <= 0.0 and cs[CS_PF] > p_hold + CONTACT_JUMP:
         # contact: the stem sits in its overlap with the pressure trapped above the hold and only
         # the seal leakage would bring it down (creep on the waiting vehicle); dip the input

@@ -19,8 +19,8 @@ static value ``T_ss``
     when the request itself first reaches 95 % of its mean over the steady window, so that
     the figure is the response's lag, not the profile's own rise time.
 ``t95_settled_s``
-    The response time the requirement judges: from the same start until the smoothed
-    ``T_r`` enters the band above 95 % of ``T_ss`` for the last time before the steady
+    The response time the requirement judges: from the same start until ``T_r`` (centred
+    average over :data:`SETTLE_SMOOTH`, so that sensor noise on a small request does not count) enters the band above 95 % of ``T_ss`` for the last time before the steady
     window ends. A response that makes a first hump to 90-96 % of the request, dips and
     rises again has one value whatever side of 95 % the hump ends on; the first crossing
     (``t95_s``) jumps between the hump and the second rise.
@@ -65,6 +65,7 @@ REQ_CREEP_NM = 10.0
 STEADY_START, STEADY_END = 0.3, 1.3  # s after the request
 MIN_WINDOW = 0.1  # s
 SMOOTH = 0.01  # s
+SETTLE_SMOOTH = 0.02  # s: centred average for the band of the settled response time (sensor noise of a small request)
 CREEP_WINDOW = 0.2  # s
 PEAK_WINDOW = 0.1  # s
 #: the requirements, in the order reports list them
@@ -90,6 +91,14 @@ class Response:
     def empty(cls, standby: tuple[float, float] = (np.nan, np.nan),
               window: tuple[float, float] = (np.nan, np.nan)) -> Response:
         return cls(np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, *standby, window)
+
+
+def _centred(t: np.ndarray, y: np.ndarray, width: float) -> np.ndarray:
+    """Centred moving average over ``width`` (no lag: the band check must not shift the time it finds)."""
+    n = max(1, int(round(width / np.median(np.diff(t))))) if t.size > 1 else 1
+    if n == 1 or y.size < n:
+        return y
+    return np.convolve(y, np.ones(n) / n, mode="same")
 
 
 def _smooth(t: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -138,7 +147,8 @@ def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_
     reached = np.flatnonzero(after & (T_r >= 0.95 * T_ss))
     t95 = float(t[reached[0]] - t_start) if reached.size and T_ss > 0 else np.inf
     # the last entry into the band: after the last sample below it (smoothed, so that noise does not count)
-    below = np.flatnonzero(after & (t <= w1) & (y < 0.95 * T_ss))
+    yc = _centred(t, T_r, SETTLE_SMOOTH)
+    below = np.flatnonzero(after & (t <= w1) & (yc < 0.95 * T_ss))
     if T_ss <= 0 or not reached.size:
         settled = np.inf
     else:
