@@ -116,10 +116,11 @@ N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power 
 (CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED, CS_KISS,
  CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF) = range(19)
 N_CS = 19
-#: samples of a calm, risen pressure (above the first ARM_P, no steep rise) before a steep rise counts as contact:
-#: the jump from empty to the reset spring's prestress at the start of the fill is not one
-ARM_N = 10
+#: samples of a calm, risen pressure (above ARM_P, rising less than ARM_RISE) before a steep rise counts as contact:
+#: the jump from empty to the reset spring's prestress at the start of the fill is not one; the stroke's ramp is calm
+ARM_N = 20
 ARM_P = 0.05e5
+ARM_RISE = 0.06e5  # Pa: 0.6 JUMP
 #: the pressure averaged over 5 ms exceeding the one averaged over 20 ms by this much (Pa) is the steep rise of
 #: the plates' contact (the oil volume becomes a thousand times stiffer than the reset spring); the stroke, a
 #: pressure ramp of a few bar/s, stays well below it
@@ -293,7 +294,7 @@ def _find_kiss(ctrl, cs, meas, t_ref, phase, dt):
         return
     rise = cs[CS_PF5] - cs[CS_PF]
     if cs[CS_CALM] < ARM_N:
-        cs[CS_CALM] = cs[CS_CALM] + 1.0 if (cs[CS_PF] > ARM_P and rise < 0.25 * JUMP) else 0.0
+        cs[CS_CALM] = cs[CS_CALM] + 1.0 if (cs[CS_PF] > ARM_P and rise < ARM_RISE) else 0.0
     if cs[CS_CALM] >= ARM_N and rise > JUMP:
         # the steep rise of contact: the 20 ms average still holds about the pressure the stroke ended at (a step
         # crosses the threshold when that average has taken a third of JUMP of it)

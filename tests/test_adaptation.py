@@ -1,0 +1,54 @@
+"""Kiss-point finding within a launch and adaptation across launches, on clutches whose kiss point drifted."""
+
+import pytest
+
+from wetclutch.errors import WetclutchError
+from wetclutch.launch import adaptation, design, loop
+from wetclutch.params import Params, load
+from wetclutch.physics import actuator
+
+
+@pytest.mark.parametrize("shift", [-0.3e5, 0.3e5])
+@pytest.mark.parametrize("temp", [20.0, 85.0])
+def test_a_drifted_kiss_point_is_found_and_learnt(shift, temp):
+    # the controller is designed on the defaults; the clutch's kiss point lies 0.3 bar lower or higher
+    plant = load(overrides={"hydraulics.p_prestress": Params().hydraulics.p_prestress + shift})
+    true = actuator.contact_pressure(plant)
+    d = design.cached(Params(), "launch")
+    runs = loop.sequence(plant, d, loop.Conditions(t_ref=100.0, oil_temp_C=temp), 3)
+    for r in runs:
+        assert r.kiss_found_Pa == pytest.approx(true, abs=0.12e5)
+    # from the second launch on it starts where the first found it, fills to the right place and does not slam
+    assert runs[1].summary["kiss_start_Pa"] == pytest.approx(runs[0].kiss_found_Pa)
+    for r in runs[1:]:
+        assert r.summary["overshoot_pct"] < 25.0, r.summary
+        assert r.summary["t95_settled_s"] < 0.2, r.summary
+    assert runs[-1].adaptation.launches[adaptation.band(temp)] == 3
+
+
+def test_adaptation_state_round_trips_and_bad_files_name_the_field(tmp_path):
+    a = adaptation.Adaptation().learn(41.0, 0.9e5).learn(41.0, 1.0e5).learn(85.0, 0.7e5)
+    assert a.kiss(45.0) == pytest.approx(0.95e5) and a.kiss(85.0) == 0.7e5 and a.kiss(10.0) is None
+    back = adaptation.loads(a.to_toml())
+    assert back == a
+    bad = a.to_toml().replace("launches = 2", "launches = -2")
+    with pytest.raises(WetclutchError, match=r"band\[0\].launches"):
+        adaptation.loads(bad)
+    with pytest.raises(WetclutchError, match="kiss_Pa"):
+        adaptation.loads(a.to_toml().replace("kiss_Pa = 95000.0", "kiss_Pa = nan"))
+    with pytest.raises(WetclutchError, match="cannot read adaptation file"):
+        adaptation.load(tmp_path / "missing.toml")
+
+
+def test_cli_sequence_writes_the_state_and_resumes_from_it(tmp_path):
+    from wetclutch.cli import main
+
+    out = tmp_path / "seq"
+    args = ["--set", "hydraulics.p_prestress=70000", "--oil-temp", "60", "--t-ref", "80"]
+    assert main(["launch", "--out", str(out), "--sequence", "2", *args]) == 0
+    state = adaptation.load(out / "adaptation.toml")
+    assert state.launches[adaptation.band(60.0)] == 2
+    assert (out / "sequence.csv").read_text().count("\n") == 3
+    assert main(["launch", "--out", str(tmp_path / "next"), "--adaptation", str(out / "adaptation.toml"), *args]) == 0
+    nxt = adaptation.load(tmp_path / "next" / "adaptation.toml")
+    assert nxt.launches[adaptation.band(60.0)] == 3
