@@ -52,8 +52,13 @@ code { font-size: 0.85em; background: #f4f4f4; padding: 0 2px; word-break: break
 img { max-width: 100%; }
 """
 
+_PLAIN = """<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>{{ title | e }}</title>
+{% block postamble %}{% endblock %}</head>
+<body>{% block contents %}{% endblock %}</body></html>"""
+
 _TEMPLATE = """{% extends base %}
-{% block preamble %}<style>{{ style }}</style>{% endblock %}
+{% block postamble %}<style>{{ style }}</style>{% endblock %}
 {% block contents %}{{ body }}{% endblock %}"""
 
 
@@ -79,6 +84,8 @@ def page(title: str, text_md: str, plots: Mapping[str, LayoutDOM], folder: Path 
     """
     # "- #3: ..." would be read as a heading inside a list item
     text_md = re.sub(r"^(\s*[-*] )#", r"\1\\#", text_md, flags=re.M)
+    # an image on a line of its own becomes a paragraph of its own (to be replaced whole)
+    text_md = re.sub(r"^(!\[[^\]]*\]\([^)]+\))\s*$", r"\n\1\n", text_md, flags=re.M)
     body = markdown.markdown(text_md, extensions=["tables"], output_format="html")
     body = re.sub(r"<td>(<strong>)?pass(</strong>)?</td>", r'<td class="pass">\1pass\2</td>', body)
     body = re.sub(r"<td>(<strong>)?FAIL(</strong>)?</td>", r'<td class="fail">\1FAIL\2</td>', body)
@@ -99,6 +106,8 @@ def page(title: str, text_md: str, plots: Mapping[str, LayoutDOM], folder: Path 
     # the report's text is data, not template: keep jinja away from it, then let only the embeds through
     text = "".join(p.replace("{{", "&#123;&#123;") if "embed(docs" not in p else p for p in parts)
     template = jinja2.Environment().from_string(_TEMPLATE.replace("{{ body }}", text))
+    if not roots:  # nothing interactive: a plain page
+        return template.render(base=jinja2.Template(_PLAIN), style=_STYLE, title=title)
     return file_html(roots, INLINE, title, template=template, template_variables={"style": _STYLE})
 
 
@@ -191,12 +200,17 @@ def verify_plots(result: Mapping[str, Any]) -> LayoutDOM:
     the same launches in the others.
     """
     src = verify_source(result)
+    ranges = {_column(k): v for k, v in result.get("ranges", {}).items()}
     names = [n for n in src.data if n not in {"index", "corner", "result", "replay", "failed", "color"}
              and n not in {k for k, _, _ in METRICS}]
-    tips = ([("launch", "#@index (corner: @corner)"), ("result", "@result (fails: @failed)")]
-            + [(n, f"@{{{n}}}{{0.000}}") for n in names]
-            + [(label, f"@{{{key}}}{{0.000}}") for key, label, _ in METRICS]
-            + [("replay", "@replay")])
+    rows = ([("launch", "#@index (corner: @corner)"), ("result", "@result (fails: @failed)")]
+            + [(n + (" (x default)" if ranges.get(n, {}).get("how") == "rel" else ""), f"@{{{n}}}{{0.000}}")
+               for n in names]
+            + [(label, f"@{{{key}}}{{0.000}}") for key, label, _ in METRICS])
+    # an HTML tooltip: the replay command is long and must wrap
+    tips = ('<div class="wc-tip" style="max-width: 430px; font-size: 11px;"><table>'
+            + "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in rows)
+            + '</table><div>replay:</div><code style="white-space: normal; word-break: break-all;">@replay</code></div>')
     hists = []
     for key, label, limit in METRICS:
         v = np.asarray(src.data[key], dtype=float)
