@@ -298,13 +298,14 @@ def _cmd_identify(args: argparse.Namespace) -> None:
 def _cmd_export_fmu(args: argparse.Namespace) -> None:
     from .fmi import export
 
-    p = _load_params(args)
-    if args.controller is None:
-        path = export.export_plant(p, args.out, pwm=args.pwm)
+    if args.controller is None and args.controller_file is None:
+        path = export.export_plant(_load_params(args), args.out, pwm=args.pwm)
         print(f"export-fmu: plant ({'PWM duty' if args.pwm else 'DC voltage'} input) -> {path}")
     else:
-        path = export.export_controller(args.controller, p, args.out, args.dt)
-        print(f"export-fmu: {args.controller} controller, sampled every {args.dt * 1e3:g} ms -> {path}")
+        plant, origin = _plant(args)
+        d = _design(args, plant, origin)
+        path = export.export_controller(d, args.out, args.dt)
+        print(f"export-fmu: {d.kind} controller, sampled every {args.dt * 1e3:g} ms -> {path}")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -423,8 +424,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     fmu = sub.add_parser("export-fmu", help="write an FMI 2.0 co-simulation FMU of the plant or of a launch controller")
     fmu.add_argument("--out", required=True, metavar="F.fmu", help="the FMU file to write")
-    fmu.add_argument("--controller", choices=("launch", "pi"), help="export this controller, designed on the "
-                     "parameters (default: export the plant)")
+    _controller_args(fmu)  # either of them: export that controller (default: export the plant)
     fmu.add_argument("--pwm", action="store_true", help="plant: the valve input is a PWM duty cycle (default DC volts)")
     fmu.add_argument("--dt", type=float, default=1e-3, metavar="S", help="controller: sample time (default 0.001)")
     _param_args(fmu)

@@ -1,9 +1,9 @@
 """A launch controller as a stepped model: the measured channels and the request in, the valve input out.
 
 :class:`Controller` is what the controller FMU runs (:mod:`wetclutch.fmi.controller_fmu`):
-the compiled controller of :mod:`wetclutch.launch.controller` on the record that
-:func:`wetclutch.launch.design.record` designs from a controller kind and a nominal
-parameter set, sampled once per step as the closed launch loop samples it.
+the compiled controller of :mod:`wetclutch.launch.controller` on the record of a design
+(:func:`wetclutch.launch.design.record`: a controller kind designed on a plant, or a
+controller file), sampled once per step as the closed launch loop samples it.
 """
 
 from __future__ import annotations
@@ -15,7 +15,6 @@ import numpy as np
 from ..errors import WetclutchError
 from ..launch import controller as control
 from ..launch import design
-from ..params import Params
 
 #: inputs: the measured channels (SI; oil temperature in C) and the torque request (N m)
 INPUTS = (*control.MEASURED, "t_ref")
@@ -36,9 +35,10 @@ class Controller:
         self.state = np.zeros(control.N_CS)
 
     @classmethod
-    def design(cls, kind: str, params: Params, dt: float = 1e-3) -> Controller:
-        """The controller ``kind`` (``launch`` or ``pi``) designed on ``params``, sampled every ``dt`` s."""
-        return cls(design.record(kind, params, None, dt))
+    def of(cls, d: design.Design, dt: float = 1e-3) -> Controller:
+        """The controller of design ``d`` (:func:`wetclutch.launch.design.design`, or a controller file's),
+        sampled every ``dt`` s."""
+        return cls(design.record(d, dt))
 
     def step(self, measured: Mapping[str, float], t_ref: float) -> float:
         """One sample: the measured channels by name (:data:`wetclutch.launch.controller.MEASURED`) and the

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from .. import params as params_mod
 from ..errors import WetclutchError
+from ..launch.design import Design
 from ..params import Params
 from .controller import Controller
 
@@ -51,10 +52,10 @@ def export_plant(params: Params, out: str | Path, pwm: bool = False) -> Path:
                                    "options.json": json.dumps({"pwm": bool(pwm)})}, out)
 
 
-def export_controller(kind: str, params: Params, out: str | Path, dt: float = 1e-3) -> Path:
-    """Write the FMU of the controller ``kind`` designed on ``params`` (the plant as the controller believes it)."""
+def export_controller(d: Design, out: str | Path, dt: float = 1e-3) -> Path:
+    """Write the FMU of the controller of design ``d`` (a kind designed on a plant, or a controller file's)."""
     if not 1e-4 <= dt <= 1e-2:
         raise WetclutchError(f"--dt must be in 0.0001..0.01 s (got {dt:g})")
-    ctrl = Controller.design(kind, params, dt)
-    spec = {"kind": kind, "dt": dt, "record": ctrl.record.tolist()}
+    ctrl = Controller.of(d, dt)
+    spec = {"kind": d.kind, "dt": dt, "record": ctrl.record.tolist()}
     return _build("controller_fmu.py", {"controller.json": json.dumps(spec)}, out)

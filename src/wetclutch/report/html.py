@@ -165,58 +165,57 @@ def launch_plot(runs: Sequence[tuple[str, pd.DataFrame]], truth: pd.DataFrame | 
     return column(figs)
 
 
-#: the verification's metrics: key, label, requirement limit (None: none)
-METRICS = (("steady_state_error_pct", "steady-state error [%]", metrics.REQ_ESS_PCT),
-           ("t95_s", "t95 [s]", metrics.REQ_T95_S),
-           ("overshoot_pct", "overshoot [%]", None),
-           ("jerk_max", "max torque rate [N m/s]", None))
+#: a verification's metrics as the verification report lists them: (key, label, requirement limit or None)
+MetricSpecs = Sequence[tuple[str, str, "float | None"]]
 
 
 def _column(name: str) -> str:
     return name.replace(".", "_")
 
 
-def verify_source(result: Mapping[str, Any]) -> ColumnDataSource:
-    """One row per launch of a verification run: its conditions, metrics, pass/fail and replay command."""
+def verify_source(result: Mapping[str, Any], specs: MetricSpecs) -> ColumnDataSource:
+    """One row per launch of a verification run: its sampled values, metrics, pass/fail and replay command."""
     rows = result["results"]
     data: dict[str, list[Any]] = {"index": [r["index"] for r in rows], "corner": [r["corner"] for r in rows],
                                   "result": ["pass" if r["all_pass"] else "FAIL" for r in rows],
                                   "replay": [r["replay"] for r in rows],
                                   "failed": [", ".join(k for k, ok in r["requirements"].items() if not ok) or "none"
-                                             for r in rows]}
-    for name in rows[0]["values"] if rows else ():
-        data[_column(name)] = [r["values"][name] for r in rows]
-    for key, _, _ in METRICS:
+                                             for r in rows],
+                                  "color": ["#2ca02c" if r["all_pass"] else "#d62728" for r in rows]}
+    for rg in result["ranges"]:
+        data[_column(rg["name"])] = [r["values"].get(rg["name"], np.nan) for r in rows]
+    for key, _, _ in specs:
         data[key] = [np.nan if r["metrics"].get(key) is None else r["metrics"][key] for r in rows]
-    data["color"] = ["#2ca02c" if r["all_pass"] else "#d62728" for r in rows]
     return ColumnDataSource(data)
 
 
-def verify_plots(result: Mapping[str, Any]) -> LayoutDOM:
-    """Histograms of the metrics with the limits, and scatters of the metrics over the conditions.
+def _range_label(rg: Mapping[str, Any]) -> str:
+    how = {"rel": " (x plant)", "offset": " (+ plant)"}.get(rg["how"], "")
+    return f"{rg['name']}{how}" + (f" [{rg['unit']}]" if rg.get("unit") else "")
 
-    Every launch is a point; hovering it shows its conditions, figures and the command
-    that replays it. The scatters share one data source, so a selection in one marks
-    the same launches in the others.
+
+def verify_plots(result: Mapping[str, Any], specs: MetricSpecs) -> LayoutDOM:
+    """Histograms of the metrics with the limits, and scatters of the metrics over the sampled ranges.
+
+    Every launch is a point; hovering it shows its sampled values, figures and the
+    command that replays it. The scatters share one data source, so a selection in one
+    marks the same launches in the others.
     """
-    src = verify_source(result)
-    ranges = {_column(k): v for k, v in result.get("ranges", {}).items()}
-    names = [n for n in src.data if n not in {"index", "corner", "result", "replay", "failed", "color"}
-             and n not in {k for k, _, _ in METRICS}]
+    src = verify_source(result, specs)
+    ranges = list(result["ranges"])
     rows = ([("launch", "#@index (corner: @corner)"), ("result", "@result (fails: @failed)")]
-            + [(n + (" (x default)" if ranges.get(n, {}).get("how") == "rel" else ""), f"@{{{n}}}{{0.000}}")
-               for n in names]
-            + [(label, f"@{{{key}}}{{0.000}}") for key, label, _ in METRICS])
+            + [(_range_label(rg), f"@{{{_column(rg['name'])}}}{{0.0000}}") for rg in ranges]
+            + [(label, f"@{{{key}}}{{0.000}}") for key, label, _ in specs])
     # an HTML tooltip: the replay command is long and must wrap
     tips = ('<div class="wc-tip" style="max-width: 430px; font-size: 11px;"><table>'
             + "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in rows)
             + '</table><div>replay:</div><code style="white-space: normal; word-break: break-all;">@replay</code></div>')
-    hists = []
-    for key, label, limit in METRICS:
+    figs = []
+    for key, label, limit in specs:
         v = np.asarray(src.data[key], dtype=float)
         v = v[np.isfinite(v)]
         f = figure(title=label, width=WIDTH // 2, height=220, x_axis_label=label, y_axis_label="launches",
-            tools="pan,wheel_zoom,box_zoom,reset,save")
+                   tools="pan,wheel_zoom,box_zoom,reset,save")
         if v.size:
             counts, edges = np.histogram(v, bins=min(40, max(5, v.size // 5)))
             h = ColumnDataSource({"top": counts, "left": edges[:-1], "right": edges[1:]})
@@ -227,21 +226,20 @@ def verify_plots(result: Mapping[str, Any]) -> LayoutDOM:
             if v.size:  # keep the limit in view
                 lo, hi = min(float(v.min()), limit), max(float(v.max()), limit)
                 f.x_range = Range1d(lo - 0.05 * (hi - lo), hi + 0.05 * (hi - lo))
-        hists.append(f)
-    scat = []
-    for x, y in (("oil_temp_C", "t95_s"), ("friction_mu_scale", "steady_state_error_pct"),
-                 ("driveline_ratio", "overshoot_pct"), ("t_ref", "t95_s")):
-        if x not in src.data:
-            continue
-        f = figure(title=f"{y} over {x}", width=WIDTH // 2, height=260, x_axis_label=x, y_axis_label=y,
-                   tools="pan,wheel_zoom,box_zoom,box_select,tap,reset,save")
-        f.scatter(x, y, source=src, color="color", size=6, alpha=0.7)
-        limit = {k: lim for k, _, lim in METRICS}[y]
+        figs.append(f)
+    # each metric with a limit over the ranges that take part in the corners (the ones that matter most)
+    xs = [rg for rg in ranges if rg.get("corner")] or ranges[:4]
+    ys = [(key, label, limit) for key, label, limit in specs if limit is not None] or list(specs)
+    for i, rg in enumerate(xs):
+        key, label, limit = ys[i % len(ys)]
+        f = figure(title=f"{label} over {rg['name']}", width=WIDTH // 2, height=260, x_axis_label=_range_label(rg),
+                   y_axis_label=label, tools="pan,wheel_zoom,box_zoom,box_select,tap,reset,save")
+        f.scatter(_column(rg["name"]), key, source=src, color="color", size=6, alpha=0.7)
         if limit is not None:
             f.add_layout(Span(location=limit, dimension="width", line_color="#d62728", line_width=1.5))
         f.add_tools(HoverTool(tooltips=tips))
-        scat.append(f)
-    return gridplot(hists + scat, ncols=2)
+        figs.append(f)
+    return gridplot(figs, ncols=2)
 
 
 def calibration_plots(figs: Sequence[Any], band: Callable[[Any, Any], tuple[Any, Any]]) -> LayoutDOM:
@@ -319,15 +317,16 @@ def _launch_title(summary: Mapping[str, Any]) -> str:
     return f"{summary['oil_temp_C']:g} C, {summary['t_ref_Nm']:g} N m"
 
 
-def write_main(path: Path, text_md: str, job: Any) -> None:
+def write_main(path: Path, text_md: str, job: Any, specs: MetricSpecs) -> None:
     """The main job's page: its report, every nominal launch (design against baseline) and both verifications.
 
     ``job`` is a :class:`wetclutch.launch.campaign.MainJob`; its launches are pairs of
-    :class:`~wetclutch.launch.LaunchResult` (design, baseline).
+    :class:`~wetclutch.launch.LaunchResult` (design, baseline); ``specs``: the metrics shown, as the
+    verification report lists them.
     """
     def plot(i: int) -> LayoutDOM:
         res, base = job.launches[i]
-        return launch_plot([(res.controller, res.signals), (f"{base.controller} baseline", base.signals)], res.truth)
+        return launch_plot([(res.controller, res.signals), (base.controller, base.signals)], res.truth)
 
     plots: dict[str, LayoutDOM] = {name: plot(int(name[7:-4]))
                                    for name in re.findall(r"!\[[^\]]*\]\((launch_\d+\.png)\)", text_md)}
@@ -336,33 +335,35 @@ def write_main(path: Path, text_md: str, job: Any) -> None:
     for i, (res, _) in enumerate(job.launches):
         plots[f"nominal_{i}.png"] = plot(i)
         extra += [f"### {_launch_title(res.summary)}", "", f"![launch {_launch_title(res.summary)}](nominal_{i}.png)", ""]
-    plots["verify_launch.png"] = verify_plots(job.verify)
-    plots["verify_pi.png"] = verify_plots(job.verify_baseline)
-    extra += ["## Worst launches of the verifications", "", worst_table(job.verify), worst_table(job.verify_baseline)]
+    for name in re.findall(r"!\[[^\]]*\]\((verify_\w+\.png)\)", text_md):
+        plots[name] = verify_plots(job.verify_baseline if "baseline" in name else job.verify, specs)
+    extra += ["## Worst launches of the verifications", "", worst_table(job.verify, specs),
+              worst_table(job.verify_baseline, specs)]
     write(path, "wetclutch launch report", text_md + "\n".join(extra), plots)
 
 
-def worst_table(result: Mapping[str, Any]) -> str:
-    """Markdown: the worst launches of a verification, each requirement's pass/fail and the replay command."""
-    names = ("steady_state_error", "response_time", "robustness")
+def worst_table(result: Mapping[str, Any], specs: MetricSpecs) -> str:
+    """Markdown: the worst launches of a verification, their values, each requirement's pass/fail, the replay command."""
+    names = list(metrics.REQUIREMENTS)
     lines = [f"### Worst launches, {result['controller']}", "",
-             "| launch | oil C | mu scale | ratio | request N m | ess % | t95 s | overshoot % | "
-             + " | ".join(names) + " | replay |", "|---" * (9 + len(names)) + "|"]
-    num = lambda v, f: "-" if v is None else format(v, f)  # noqa: E731
+             "| launch | sampled values | " + " | ".join(label for _, label, _ in specs) + " | "
+             + " | ".join(names) + " | replay |", "|---" * (3 + len(specs) + len(names)) + "|"]
+    num = lambda v: "-" if v is None else f"{v:.4g}"  # noqa: E731
     for w in result["worst"]:
-        v, m = w["values"], w["metrics"]
-        lines.append(f"| #{w['index']} | {v['oil_temp_C']:.1f} | {v['friction.mu_scale']:.3f} | {v['driveline.ratio']:.3f} | "
-                     f"{v['t_ref']:.1f} | {num(m.get('steady_state_error_pct'), '.2f')} | {num(m.get('t95_s'), '.3f')} | "
-                     f"{num(m.get('overshoot_pct'), '.1f')} | "
-                     + " | ".join("pass" if w["requirements"][k] else "FAIL" for k in names)
+        vals = ", ".join(f"{k} {v:.4g}" for k, v in w["values"].items())
+        lines.append(f"| #{w['index']} | {vals} | " + " | ".join(num(w["metrics"].get(k)) for k, _, _ in specs) + " | "
+                     + " | ".join("pass" if w["requirements"].get(k) else "FAIL" for k in names)
                      + f" | `{w['replay']}` |")
     return "\n".join(lines) + "\n"
 
 
-def write_verify(path: Path, text_md: str, result: Mapping[str, Any]) -> None:
-    """A verification's page: its report with the interactive histograms and scatters, and its worst launches."""
-    write(path, f"wetclutch verify {result['controller']}", text_md + "\n" + worst_table(result),
-          {"histograms.png": verify_plots(result)})
+def write_verify(path: Path, text_md: str, result: Mapping[str, Any], specs: MetricSpecs) -> None:
+    """A verification's page: its report with the interactive histograms and scatters, and its worst launches.
+
+    ``specs``: the metrics shown, as the verification report lists them.
+    """
+    write(path, f"wetclutch verify {result['controller']}", text_md + "\n" + worst_table(result, specs),
+          {"histograms.png": verify_plots(result, specs)})
 
 
 def write_calibration(path: Path, text_md: str, figs: Sequence[Any],

@@ -12,7 +12,7 @@ from ..output import atomic_dir, write_json
 from . import html
 from .design import design_md
 from .plots import plot_launch
-from .verify import REQUIREMENT_LABELS, bins_table, plot_histograms, verify_table
+from .verify import _METRICS, REQUIREMENT_LABELS, bins_table, plot_histograms, verify_table
 
 
 def same_samples(ver: dict[str, Any], base: dict[str, Any]) -> dict[str, float]:
@@ -45,7 +45,7 @@ def write(job: MainJob, out: str | Path) -> dict[str, Any]:
         write_json(d / "summary.json", summary)
         md = _report_md(job, summary)
         (d / "report.md").write_text(md)
-        html.write_main(d / "report.html", md, job)
+        html.write_main(d / "report.html", md, job, _METRICS)
     return summary
 
 

@@ -116,4 +116,4 @@ def write(result: dict[str, Any], out: str | Path, design: Design) -> None:
                  "all_pass": r["all_pass"]} for r in result["results"]]
         pd.DataFrame(rows).to_csv(d / "samples.csv", index=False)
         plot_histograms(result, d / "histograms.png")
-        html.write_verify(d / "verify.html", md, result)
+        html.write_verify(d / "verify.html", md, result, _METRICS)
