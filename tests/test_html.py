@@ -21,6 +21,7 @@ from PIL import Image
 from playwright.sync_api import Page, sync_playwright
 
 from wetclutch import params
+from wetclutch.launch.metrics import REQUIREMENTS
 from wetclutch.report import rig as rig_report
 from wetclutch.rig import experiments as rig
 
@@ -126,7 +127,7 @@ def _cells(page: Page) -> tuple[int, int]:
 
 
 def test_pass_fail_cells_match_the_results(reports, browser):
-    names = ("steady_state_error", "response_time", "robustness")
+    names = REQUIREMENTS
     # calibration: one cell a figure
     rep = json.loads(reports["calibration"].with_name("report.json").read_text())
     page, _, _ = _open(browser, reports["calibration"])
@@ -141,7 +142,7 @@ def test_pass_fail_cells_match_the_results(reports, browser):
     # main: each nominal launch of design and baseline, and the worst launches of both verifications
     summary = json.loads(reports["main"].with_name("summary.json").read_text())
     flags = [s[c]["requirements"][k] for s in summary["nominal"] for c in ("design", "baseline") for k in names]
-    for f in ("verify_launch.json", "verify_pi.json"):
+    for f in ("verify_launch.json", "verify_baseline.json"):
         flags += [w["requirements"][k] for w in json.loads(reports["main"].with_name(f).read_text())["worst"] for k in names]
     page, _, _ = _open(browser, reports["main"])
     assert _cells(page) == (sum(flags), len(flags) - sum(flags))
@@ -151,25 +152,30 @@ def test_pass_fail_cells_match_the_results(reports, browser):
 def test_hovering_a_verification_sample_shows_its_replay_command(reports, browser):
     ver = json.loads(reports["verify"].with_name("verify.json").read_text())
     page, _, _ = _open(browser, reports["verify"])
-    # the first scatter (t95 over oil temperature): where launch 0 is drawn, in page pixels
+    # where a launch is drawn in the first scatter, in page pixels
     xy = page.evaluate("""() => {
       const views = [];
       const walk = v => { if (v.model.type === 'Figure') views.push(v); for (const c of v.child_views ?? []) walk(c); };
       Object.values(Bokeh.index).forEach(walk);
-      const v = views.find(v => v.model.title.text.startsWith('t95_s over oil_temp_C'));
+      // the first scatter of the launches (its data source carries the replay commands)
+      const v = views.find(v => [...v.renderer_views.values()].some(r => r.model.data_source?.data?.replay !== undefined));
       v.el.scrollIntoView({block: "center"});
       const rv = [...v.renderer_views.values()].find(r => r.model.data_source.data.replay !== undefined);
       const d = rv.model.data_source.data;
+      const g = rv.model.glyph;
+      // a launch with both coordinates finite
+      const i = d.index.findIndex((_, k) => Number.isFinite(d[g.x.field][k]) && Number.isFinite(d[g.y.field][k]));
       const box = v.canvas_view.el.getBoundingClientRect();
-      return [box.left + v.frame.x_scale.compute(d.oil_temp_C[0]), box.top + v.frame.y_scale.compute(d.t95_s[0])];
+      return [box.left + v.frame.x_scale.compute(d[g.x.field][i]), box.top + v.frame.y_scale.compute(d[g.y.field][i]),
+              d.index[i]];
     }""")
     page.mouse.move(xy[0] - 30, xy[1] - 30)
-    page.mouse.move(*xy)
+    page.mouse.move(xy[0], xy[1])
     page.wait_for_timeout(300)
     tooltip = page.locator(".wc-tip")  # inside the tooltip's shadow root
     tooltip.first.wait_for(state="visible", timeout=5000)
     text = tooltip.first.inner_text()
-    first = ver["results"][0]
-    assert first["replay"] in text
-    assert "oil_temp_C" in text and "#0" in text, text
+    launch = next(r for r in ver["results"] if r["index"] == xy[2])
+    assert launch["replay"] in text
+    assert f"#{launch['index']}" in text and ver["ranges"][0]["name"] in text, text
     page.context.close()
