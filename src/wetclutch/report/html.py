@@ -41,7 +41,7 @@ PALETTE = Category10_10
 _STYLE = """
 body { font-family: system-ui, sans-serif; max-width: 1000px; margin: 1em auto; padding: 0 1em; color: #222;
        height: auto; display: block; }
-table { border-collapse: collapse; margin: 0.6em 0; font-size: 0.9em; }
+table { border-collapse: collapse; margin: 0.6em 0; font-size: 0.9em; display: block; max-width: 100%; overflow-x: auto; }
 th, td { border: 1px solid #ccc; padding: 2px 7px; text-align: right; }
 th { background: #f0f0f0; }
 td:first-child { text-align: left; }
