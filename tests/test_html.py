@@ -100,7 +100,7 @@ def _screenshot(page: Page, name: str, tmp_path: Path) -> Path:
     shot = folder / f"{name}.png"
     page.screenshot(path=str(shot), full_page=True)
     img = np.asarray(Image.open(shot).convert("L"))
-    assert (img < 200).mean() > 0.02, "the screenshot is (nearly) blank"
+    assert (img < 250).mean() > 0.02, "the screenshot is (nearly) blank"
     return shot
 
 
