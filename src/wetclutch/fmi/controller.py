@@ -26,19 +26,23 @@ class Controller:
     Parameters
     ----------
     record
-        The controller's flat record (:func:`design`).
+        The controller's flat record (:func:`wetclutch.launch.design.record`).
+    kiss_Pa
+        The kiss point the controller starts from, Pa: the design's, or one learnt in earlier
+        launches (:class:`wetclutch.launch.adaptation.Adaptation`).
     """
 
-    def __init__(self, record: np.ndarray) -> None:
+    def __init__(self, record: np.ndarray, kiss_Pa: float) -> None:
         self.record = np.asarray(record, dtype=float)
         self.dt = float(self.record[control.DT])
         self.state = np.zeros(control.N_CS)
+        self.state[control.CS_KISS] = kiss_Pa
 
     @classmethod
     def of(cls, d: design.Design, dt: float = 1e-3) -> Controller:
         """The controller of design ``d`` (:func:`wetclutch.launch.design.design`, or a controller file's),
-        sampled every ``dt`` s."""
-        return cls(design.record(d, dt))
+        sampled every ``dt`` s, starting from the design's kiss point."""
+        return cls(design.record(d, dt), d.settings["p_kiss"])
 
     def step(self, measured: Mapping[str, float], t_ref: float) -> float:
         """One sample: the measured channels by name (:data:`wetclutch.launch.controller.MEASURED`) and the

@@ -6,10 +6,11 @@ needs a Python with ``wetclutch`` installed (see the README).
 
 Inputs: the measured channels ``p_clutch`` (Pa), ``T_r`` (N m), ``omega_p``, ``omega_1``,
 ``omega_r``, ``omega_s`` (rad/s), ``oil_temp`` (C) and the request ``t_ref`` (N m); output
-``u``, the valve's DC input (V). Each step takes one controller sample: the step size
-must be the sample time (the parameter ``dt``), and the output after a step from ``t``
-is the input to hold from ``t`` on (so a master steps the controller before the plant,
-as the closed launch loop does; a master that steps both at once adds one sample of delay).
+``u``, the valve's DC input (V); parameter ``kiss_Pa``, the kiss point it starts from.
+Each step takes one controller sample: the step size must be the sample time (``dt``),
+and the output after a step from ``t`` is the input to hold from ``t`` on (so a master
+steps the controller before the plant, as the closed launch loop does; a master that
+steps both at once adds one sample of delay).
 """
 
 from __future__ import annotations
@@ -40,10 +41,14 @@ class WetclutchController(Fmi2Slave):
         self.kind = str(data["kind"])
         self._record = data["record"]
         self.dt = float(data.get("dt", 1e-3))
+        self.kiss_Pa = float(data.get("kiss_Pa", 0.0))
         self.register_variable(String("kind", causality=Fmi2Causality.local, variability=Fmi2Variability.constant,
                                       description="controller kind (as designed)"))
         self.register_variable(Real("dt", causality=Fmi2Causality.local, variability=Fmi2Variability.constant,
                                     description="sample time, which the communication step must be [s]"))
+        self.register_variable(Real("kiss_Pa", causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed,
+                                    description="kiss point the controller starts from (the design's, or one learnt "
+                                                "in earlier launches) [Pa]"))
         self._in = {name: 0.0 for name in INPUTS}
         for name in INPUTS:
             self.register_variable(Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
@@ -59,7 +64,7 @@ class WetclutchController(Fmi2Slave):
         return with_initial_unknowns(super().to_xml(model_options or {}))
 
     def exit_initialization_mode(self) -> None:
-        self._ctrl = Controller(self._record)
+        self._ctrl = Controller(self._record, self.kiss_Pa)
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         assert self._ctrl is not None

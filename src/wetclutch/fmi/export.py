@@ -18,6 +18,7 @@ from .. import params as params_mod
 from ..errors import WetclutchError
 from ..launch.design import Design
 from ..params import Params
+from ..launch.controller import CS_KISS
 from .controller import Controller
 
 HERE = Path(__file__).resolve().parent
@@ -57,5 +58,5 @@ def export_controller(d: Design, out: str | Path, dt: float = 1e-3) -> Path:
     if not 1e-4 <= dt <= 1e-2:
         raise WetclutchError(f"--dt must be in 0.0001..0.01 s (got {dt:g})")
     ctrl = Controller.of(d, dt)
-    spec = {"kind": d.kind, "dt": dt, "record": ctrl.record.tolist()}
+    spec = {"kind": d.kind, "dt": dt, "record": ctrl.record.tolist(), "kiss_Pa": float(ctrl.state[CS_KISS])}
     return _build("controller_fmu.py", {"controller.json": json.dumps(spec)}, out)
