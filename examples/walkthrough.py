@@ -43,6 +43,18 @@ from wetclutch.rig import experiments as rig
 OUT = Path(sys.argv[1]) if len(sys.argv) > 1 and not sys.argv[1].startswith("-") else Path("out/walkthrough")
 OUT.mkdir(parents=True, exist_ok=True)
 
+
+def stacked(df, panels, path):
+    """Signals of ``df`` over time, one panel per (label, columns, scale); saved to ``path``."""
+    fig, axes = plt.subplots(len(panels), 1, figsize=(8, 2.4 * len(panels)), sharex=True)
+    for ax, (label, cols, scale) in zip(axes, panels):
+        for c in cols:
+            ax.plot(df["time"], df[c] * scale, label=c)
+        ax.set_ylabel(label)
+        ax.legend(fontsize=7)
+    axes[-1].set_xlabel("time [s]")
+    fig.savefig(path)
+
 # %% [markdown]
 # ## 1. Rig experiments
 #
@@ -59,14 +71,7 @@ runs = {
 }
 for name, res in runs.items():
     rig_report.write(res, OUT / "rig" / name)
-m = runs["step41"].measured
-fig, ax = plt.subplots(2, 1, figsize=(8, 5), sharex=True)
-ax[0].plot(m["time"], m["p_clutch"] / 1e5)
-ax[0].set_ylabel("p_clutch [bar]")
-ax[1].plot(m["time"], m["T_r"])
-ax[1].set_ylabel("T_r [N m]")
-ax[1].set_xlabel("time [s]")
-fig.savefig(OUT / "step41.png")
+stacked(runs["step41"].measured, [("p [bar]", ["p_clutch"], 1e-5), ("T_r [N m]", ["T_r"], 1.0)], OUT / "step41.png")
 
 # %% [markdown]
 # ## 2. Identification
@@ -94,17 +99,8 @@ launch = simulate(truth, ctrl, Conditions(t_ref=120.0))
 s = launch.summary
 print(f"launch: steady-state error {s['steady_state_error_pct']:.2f} %, t95 {s['t95_s']:.3f} s, "
       f"requirements {s['requirements']}")
-sig = launch.signals
-fig, ax = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
-ax[0].plot(sig["time"], sig["t_ref"], "k--", label="request")
-ax[0].plot(sig["time"], sig["T_r"], label="T_r measured")
-ax[0].legend()
-ax[1].plot(sig["time"], sig["p_clutch"] / 1e5)
-ax[1].set_ylabel("p [bar]")
-ax[2].plot(sig["time"], sig["u"])
-ax[2].set_ylabel("u [V]")
-ax[2].set_xlabel("time [s]")
-fig.savefig(OUT / "launch.png")
+stacked(launch.signals, [("torque [N m]", ["t_ref", "T_r"], 1.0), ("p [bar]", ["p_clutch"], 1e-5),
+                         ("u [V]", ["u"], 1.0)], OUT / "launch.png")
 
 # %% [markdown]
 # ## 4. Verification
