@@ -16,7 +16,7 @@ import wetclutch
 PKG = Path(wetclutch.__file__).resolve().parent
 #: layer of each subpackage along the data path; the base modules (errors, params, output, the numba cache
 #: keeper) sit below all, the command line and the package's front door above all
-LAYERS = {"physics": 1, "sim": 2, "plant": 3, "rig": 4, "ident": 5, "launch": 6, "report": 7}
+LAYERS = {"physics": 1, "sim": 2, "plant": 3, "rig": 4, "ident": 5, "launch": 6, "fmi": 7, "report": 8}
 BASE = {"errors", "params", "output", "_jitcache"}
 TOP = {"cli"}
 
@@ -30,13 +30,13 @@ def _module_name(path: Path) -> str:
 def _layer(module: str) -> int:
     parts = module.split(".")[1:]
     if not parts:
-        return 9  # the package's front door (wetclutch/__init__.py)
+        return 10  # the package's front door (wetclutch/__init__.py)
     if parts[0] in LAYERS:
         return LAYERS[parts[0]]
     if parts[0] in BASE:
         return 0
     if parts[0] in TOP:
-        return 8
+        return 9
     raise AssertionError(f"{module}: not in any layer")
 
 

@@ -295,6 +295,19 @@ def _cmd_identify(args: argparse.Namespace) -> None:
           f"{len(res.responses)} frequency responses; {found or 'nothing'} -> {args.out}")
 
 
+def _cmd_export_fmu(args: argparse.Namespace) -> None:
+    from .fmi import export
+
+    if args.controller is None and args.controller_file is None:
+        path = export.export_plant(_load_params(args), args.out, pwm=args.pwm)
+        print(f"export-fmu: plant ({'PWM duty' if args.pwm else 'DC voltage'} input) -> {path}")
+    else:
+        plant, origin = _plant(args)
+        d = _design(args, plant, origin)
+        path = export.export_controller(d, args.out, args.dt)
+        print(f"export-fmu: {d.kind} controller, sampled every {args.dt * 1e3:g} ms -> {path}")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="wetclutch", description="Wet-clutch driveline model, virtual rig, identification, control.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -408,6 +421,14 @@ def build_parser() -> argparse.ArgumentParser:
     idf.add_argument("--mu-order", type=int, default=2, metavar="N", help="order of the mu(slip) polynomial (default 2)")
     _param_args(idf)  # the prior: piston area, efficiency, inertias ... and the base of params.toml
     idf.set_defaults(func=_cmd_identify)
+
+    fmu = sub.add_parser("export-fmu", help="write an FMI 2.0 co-simulation FMU of the plant or of a launch controller")
+    fmu.add_argument("--out", required=True, metavar="F.fmu", help="the FMU file to write")
+    _controller_args(fmu)  # either of them: export that controller (default: export the plant)
+    fmu.add_argument("--pwm", action="store_true", help="plant: the valve input is a PWM duty cycle (default DC volts)")
+    fmu.add_argument("--dt", type=float, default=1e-3, metavar="S", help="controller: sample time (default 0.001)")
+    _param_args(fmu)
+    fmu.set_defaults(func=_cmd_export_fmu)
 
     par = sub.add_parser("params", help="show or export the parameter record")
     psub = par.add_subparsers(dest="params_command", required=True, parser_class=_Parser)

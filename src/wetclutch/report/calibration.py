@@ -9,6 +9,7 @@ import numpy as np
 
 from ..output import atomic_dir, write_json
 from ..rig.calibration import Figure, explanation
+from . import html
 from .plots import plt
 
 
@@ -49,8 +50,10 @@ def write(figs: list[Figure], out: str | Path) -> None:
             for r in failed:
                 lines += [f"**{r['figure']}.** {r['explanation']}", ""]
         lines += ["", "Every figure against the study's, with its tolerance band:", "", "![figures](figures.png)", ""]
-        (d / "report.md").write_text("\n".join(lines))
+        md = "\n".join(lines)
+        (d / "report.md").write_text(md)
         plot_figures(figs, d / "figures.png")
+        html.write_calibration(d / "report.html", md, figs, _band)
 
 
 def _band(f: Figure, ref):

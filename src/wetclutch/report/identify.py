@@ -15,6 +15,7 @@ from ..ident.dynamics import MODEL_NAMES
 from ..ident.estimate import BAR
 from ..ident.result import Identification
 from ..output import atomic_dir, write_json
+from . import html
 from .plots import plt
 
 #: identified parameters shown against the prior: dotted path -> identified.json entry it comes from
@@ -35,7 +36,9 @@ def write(result: Identification, out: str | Path) -> None:
         write_json(d / "identified.json", result.as_json())
         (d / "params.toml").write_text(_params_toml(result))
         plots = _plots(result, d)
-        (d / "report.md").write_text(_report(result, plots))
+        md = _report(result, plots)
+        (d / "report.md").write_text(md)
+        html.write_identify(d / "report.html", md, result)
 
 
 def _changed(result: Identification) -> list[tuple[str, Any, Any]]:

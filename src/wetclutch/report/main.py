@@ -9,9 +9,10 @@ from ..launch import metrics
 from ..launch.campaign import MainJob
 from ..launch.settings import to_toml
 from ..output import atomic_dir, write_json
+from . import html
 from .design import design_md
 from .plots import plot_launch
-from .verify import REQUIREMENT_LABELS, bins_table, plot_histograms, verify_table
+from .verify import _METRICS, REQUIREMENT_LABELS, bins_table, plot_histograms, verify_table
 
 
 def same_samples(ver: dict[str, Any], base: dict[str, Any]) -> dict[str, float]:
@@ -42,7 +43,9 @@ def write(job: MainJob, out: str | Path) -> dict[str, Any]:
                    "verify": {k: ver[k] for k in keys}, "verify_baseline": {k: base[k] for k in keys},
                    "same_samples": same_samples(ver, base), "baseline_margins": job.margins}
         write_json(d / "summary.json", summary)
-        (d / "report.md").write_text(_report_md(job, summary))
+        md = _report_md(job, summary)
+        (d / "report.md").write_text(md)
+        html.write_main(d / "report.html", md, job, _METRICS)
     return summary
 
 

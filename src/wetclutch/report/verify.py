@@ -12,6 +12,7 @@ from ..launch import metrics
 from ..launch.design import Design
 from ..launch.settings import to_toml
 from ..output import atomic_dir, write_json
+from . import html
 from .plots import plt
 
 _METRICS = (("steady_state_error_pct", "steady-state error [%]", metrics.REQ_ESS_PCT),
@@ -108,9 +109,11 @@ def write(result: dict[str, Any], out: str | Path, design: Design) -> None:
     with atomic_dir(out) as d:
         (d / "controller.toml").write_text(to_toml(design))
         write_json(d / "verify.json", result)
-        (d / "verify.md").write_text("# Verification\n\n" + verify_table(result) + "\n\n## Pass rate per range bin\n\n"
-                                     + bins_table(result) + "\n\n![histograms](histograms.png)\n")
+        md = ("# Verification\n\n" + verify_table(result) + "\n\n## Pass rate per range bin\n\n"
+              + bins_table(result) + "\n\n![histograms](histograms.png)\n")
+        (d / "verify.md").write_text(md)
         rows = [{"index": r["index"], "corner": r["corner"], **r["values"], **r["metrics"], **r["requirements"],
                  "all_pass": r["all_pass"]} for r in result["results"]]
         pd.DataFrame(rows).to_csv(d / "samples.csv", index=False)
         plot_histograms(result, d / "histograms.png")
+        html.write_verify(d / "verify.html", md, result, _METRICS)

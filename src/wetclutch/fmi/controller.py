@@ -1,0 +1,53 @@
+"""A launch controller as a stepped model: the measured channels and the request in, the valve input out.
+
+:class:`Controller` is what the controller FMU runs (:mod:`wetclutch.fmi.controller_fmu`):
+the compiled controller of :mod:`wetclutch.launch.controller` on the record of a design
+(:func:`wetclutch.launch.design.record`: a controller kind designed on a plant, or a
+controller file), sampled once per step as the closed launch loop samples it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from ..errors import WetclutchError
+from ..launch import controller as control
+from ..launch import design
+
+#: inputs: the measured channels (SI; oil temperature in C) and the torque request (N m)
+INPUTS = (*control.MEASURED, "t_ref")
+
+
+class Controller:
+    """A launch controller, one sample per call of :meth:`step`.
+
+    Parameters
+    ----------
+    record
+        The controller's flat record (:func:`wetclutch.launch.design.record`).
+    kiss_Pa
+        The kiss point the controller starts from, Pa: the design's, or one learnt in earlier
+        launches (:class:`wetclutch.launch.adaptation.Adaptation`).
+    """
+
+    def __init__(self, record: np.ndarray, kiss_Pa: float) -> None:
+        self.record = np.asarray(record, dtype=float)
+        self.dt = float(self.record[control.DT])
+        self.state = np.zeros(control.N_CS)
+        self.state[control.CS_KISS] = kiss_Pa
+
+    @classmethod
+    def of(cls, d: design.Design, dt: float = 1e-3) -> Controller:
+        """The controller of design ``d`` (:func:`wetclutch.launch.design.design`, or a controller file's),
+        sampled every ``dt`` s, starting from the design's kiss point."""
+        return cls(design.record(d, dt), d.settings["p_kiss"])
+
+    def step(self, measured: Mapping[str, float], t_ref: float) -> float:
+        """One sample: the measured channels by name (:data:`wetclutch.launch.controller.MEASURED`) and the
+        request -> the valve input (V), to be held until the next sample."""
+        meas = np.array([float(measured[c]) for c in control.MEASURED])
+        if not (np.all(np.isfinite(meas)) and np.isfinite(t_ref)):
+            raise WetclutchError("controller inputs must be finite")
+        return float(control.step(self.record, self.state, meas, float(t_ref)))

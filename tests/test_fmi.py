@@ -1,0 +1,137 @@
+"""The FMUs: export, FMPy's validation, FMPy simulation against the native run of the same inputs.
+
+Tolerance. The plant FMU advances the same engine as the native closed launch loop, with
+the same tolerances, re-deciding the clutch modes after every input change exactly as
+the loop does after every controller sample; the same inputs therefore give the same
+run. What can differ is the round-off of the communication times (FMPy accumulates
+``t += h``, the loop computes ``(k + 1) h``), which moves a step end by ~1e-16 s. So the
+FMU must match to 1e-6 of each signal's range (measured: states identical, torques
+within 1e-8 of their range), and the lock state exactly.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from fmpy.fmi2 import FMU2Slave
+from fmpy.validation import validate_fmu
+
+from wetclutch import params
+from wetclutch.launch import Conditions, simulate
+from wetclutch.launch.controller import MEASURED
+
+TOL = 1e-6  # of each signal's range
+DT = 1e-3
+
+
+def _export(out: Path, *args: str) -> Path:
+    r = subprocess.run([sys.executable, "-m", "wetclutch.cli", "export-fmu", "--out", str(out), *args],
+                       capture_output=True, text=True, check=False)
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory) -> dict[str, Path]:
+    d = tmp_path_factory.mktemp("fmu")
+    return {"plant": _export(d / "plant.fmu"), "launch": _export(d / "launch.fmu", "--controller", "launch")}
+
+
+def _close(actual: np.ndarray, expected: np.ndarray, name: str) -> None:
+    scale = max(float(np.ptp(expected)), 1e-12)
+    err = float(np.max(np.abs(actual - expected)))
+    assert err <= TOL * scale, f"{name}: max error {err:.3g} > {TOL:g} x range {scale:.3g}"
+
+
+@pytest.mark.parametrize("product", ["plant", "launch"])
+def test_fmus_pass_fmpy_validation(fmus, product):
+    assert validate_fmu(str(fmus[product])) == []
+    md = read_model_description(str(fmus[product]))
+    assert md.fmiVersion == "2.0" and md.coSimulation is not None
+    names = {v.name: v for v in md.modelVariables}
+    if product == "plant":
+        assert {"u", "road_load", "oil_temp_C"} <= {n for n, v in names.items() if v.causality == "input"}
+        assert {"p_clutch", "T_c", "T_r", "omega_p", "omega_1", "omega_s", "locked"} <= {
+            n for n, v in names.items() if v.causality == "output"}
+        # the parameters are FMU parameters, with the exported values as start values
+        assert float(names["driveline.ratio"].start) == params.Params().driveline.ratio
+        assert names["friction.mu_slip_poly[2]"].causality == "parameter"
+    else:
+        assert {*MEASURED, "t_ref"} == {n for n, v in names.items() if v.causality == "input"}
+        assert [n for n, v in names.items() if v.causality == "output"] == ["u"]
+
+
+@pytest.mark.parametrize(("oil", "load"), [(None, None), (85.0, 25.0)])
+def test_plant_fmu_matches_the_native_run_of_the_same_inputs(fmus, oil, load):
+    # the native run: a launch on ideal sensors (its valve input is then a function of the true signals only)
+    p = params.Params() if load is None else params.load(None, {"engage.T_load": load})
+    res = simulate(p, "launch", Conditions(t_ref=120.0, oil_temp_C=oil, noise=False))
+    s, truth = res.signals, res.truth
+    n = len(s)
+    inputs = np.zeros(n, dtype=[("time", float), ("u", float), ("road_load", float), ("oil_temp_C", float)])
+    inputs["time"], inputs["u"] = s["time"], s["u"]
+    inputs["road_load"] = p.engage.T_load
+    inputs["oil_temp_C"] = p.rig.oil_temp_C if oil is None else oil
+    out = simulate_fmu(str(fmus["plant"]), start_time=0.0, stop_time=(n - 1) * DT, step_size=DT, output_interval=DT,
+                       input=inputs, output=["p_clutch", "T_r", "T_c", "omega_s", "locked"])
+    assert len(out) == n
+    for name in ("p_clutch", "T_r", "T_c", "omega_s"):
+        _close(out[name], truth[name].to_numpy(), name)
+    assert np.array_equal(out["locked"].astype(int), truth["locked"].to_numpy().astype(int))
+    assert truth["locked"].iloc[-1] == 1  # the run went through synchronisation
+
+
+def _slave(path: Path, tmp: Path) -> tuple[FMU2Slave, dict[str, int]]:
+    md = read_model_description(str(path))
+    unzipped = tmp / path.stem
+    with zipfile.ZipFile(path) as z:
+        z.extractall(unzipped)
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=str(unzipped), modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName=path.stem)
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    return fmu, {v.name: v.valueReference for v in md.modelVariables}
+
+
+def test_plant_and_controller_fmus_close_the_loop_like_the_native_launch(fmus, tmp_path):
+    res = simulate(params.Params(), "launch", Conditions(t_ref=100.0, noise=False))
+    s, truth = res.signals, res.truth
+    n = len(s)
+    plant, pv = _slave(fmus["plant"], tmp_path)
+    ctrl, cv = _slave(fmus["launch"], tmp_path)
+    oil = params.Params().rig.oil_temp_C
+    plant_out = ["p_clutch", "T_r", "omega_p", "omega_1", "omega_r", "omega_s"]
+    u_log, tr_log = np.zeros(n), np.zeros(n)
+    try:
+        for k in range(n):
+            t = k * DT
+            y = dict(zip(plant_out, plant.getReal([pv[c] for c in plant_out])))
+            tr_log[k] = y["T_r"]
+            t_ref = s["t_ref"].iloc[k]
+            ctrl.setReal([cv[c] for c in MEASURED] + [cv["t_ref"]], [*(y[c] for c in MEASURED[:-1]), oil, t_ref])
+            ctrl.doStep(t, DT)  # the controller first: its output is the input held over this step
+            u_log[k] = ctrl.getReal([cv["u"]])[0]
+            plant.setReal([pv["u"]], [u_log[k]])
+            plant.doStep(t, DT)
+    finally:
+        for f in (plant, ctrl):
+            f.terminate()
+            f.freeInstance()
+    _close(u_log, s["u"].to_numpy(), "u")
+    _close(tr_log, truth["T_r"].to_numpy(), "T_r")
+
+
+def test_export_bad_input_is_one_line_and_writes_nothing(tmp_path, cli_refuses):
+    cli_refuses(["export-fmu", "--set", "driveline.eta=2"], "driveline.eta", tmp_path / "a.fmu")
+    cli_refuses(["export-fmu", "--controller", "launch", "--dt", "1"], "--dt", tmp_path / "b.fmu")
+    r = cli_refuses(["export-fmu"], "--out", tmp_path / "c.zip")
+    assert "c.zip" in r.stderr
+    assert not [p for p in tmp_path.iterdir()]  # no temporary left behind
