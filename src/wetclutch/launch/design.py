@@ -55,10 +55,13 @@ _P = (0.0, 5e6)
 #: the launch controller's settings that every plant shares, with their values
 LAUNCH_DEFAULTS = {
     "hold_offset": 0.02e5, "fill_exit": 0.1e5, "fill_exit_cold": 0.05e5, "hold_rate": 1.0e5, "hold_lead": 0.01e5,
-    "req_lead": 0.2e5, "kp_p": 0.05e-5, "ki_p": 5.0e-5, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
-    "ki_t": 8.0, "tau_ref": 0.03, "tau_theta": 0.01, "theta0": 1.4, "dither_amp": 0.05, "dither_hz": 125.0,
+    "req_lead": 0.2e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
+    "ki_t": 3.9, "tau_ref": 0.034, "tau_theta": 0.01, "theta0": 3.55, "dither_amp": 0.05, "dither_hz": 125.0,
     "dither_amp_torque": 0.3, "dither_hz_torque": 125.0, "ff_shift_torque": 1.0, "dip": 0.5, "dip_time": 0.015,
 }
+#: the defaults that came from ``wetclutch tune`` on the default rig (CMA-ES, 40 training plants of the shipped
+#: ranges, seed 0, 6 generations of 8), rounded; the rest were set by hand on the default rig
+TUNED = ("kp_p", "ki_p", "ki_t", "tau_ref", "theta0")
 #: the baseline's settings that are not derived from the plant
 BASELINE_DEFAULTS = {"hold_offset": 0.05e5, "dip": 0.5, "dip_time": 0.015, "dither_amp_torque": 0.3,
                      "dither_hz_torque": 125.0}
@@ -348,7 +351,8 @@ def design(plant: Params, kind: str = "launch", origin: dict[str, str] | None = 
     if kind == "launch":
         settings = {k: float(val) for k, (val, _) in plant_values.items()} | LAUNCH_DEFAULTS
         sources = {k: src for k, (_, src) in plant_values.items()}
-        sources |= {k: "controller default" for k in LAUNCH_DEFAULTS}
+        sources |= {k: "controller default" + (" (tuned on the default rig's ranges)" if k in TUNED else "")
+                    for k in LAUNCH_DEFAULTS}
         return Design(kind, plant, settings, sources | {"input_V": map_src}, MAP_TEMPS.copy(), MAP_PRESSURES.copy(),
                       table)
     fill = _fill_times_cached(_sections_key(plant, ("valve", "hydraulics", "friction", "driveline")))
