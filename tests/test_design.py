@@ -62,6 +62,9 @@ def test_a_controller_file_round_trips_bit_for_bit(design):
     assert back.sources == design.sources
 
 
+KI_T = f"[settings.ki_t]\nvalue = {designs.LAUNCH_DEFAULTS['ki_t']!r}"
+
+
 def _edit(text: str, old: str, new: str) -> str:
     assert old in text, old
     return text.replace(old, new, 1)
@@ -70,10 +73,9 @@ def _edit(text: str, old: str, new: str) -> str:
 @pytest.mark.parametrize(("change", "fragment"), [
     (lambda t: _edit(t, 'kind = "launch"', 'kind = "fuzzy"'), "kind"),
     (lambda t: _edit(t, "[settings.hold_offset]", "[settings.hold_offsett]"), "settings.hold_offsett"),
-    (lambda t: _edit(t, '[settings.ki_t]\nvalue = 8.0\nunit = "1/s"', '[settings.ki_t]\nvalue = 8.0\nunit = "1/min"'),
-     "settings.ki_t.unit"),
-    (lambda t: _edit(t, '[settings.ki_t]\nvalue = 8.0', '[settings.ki_t]\nvalue = -8.0'), "settings.ki_t.value"),
-    (lambda t: _edit(t, '[settings.ki_t]\nvalue = 8.0', '[settings.ki_t]\nvalue = "fast"'), "settings.ki_t.value"),
+    (lambda t: _edit(t, f'{KI_T}\nunit = "1/s"', f'{KI_T}\nunit = "1/min"'), "settings.ki_t.unit"),
+    (lambda t: _edit(t, KI_T, '[settings.ki_t]\nvalue = -8.0'), "settings.ki_t.value"),
+    (lambda t: _edit(t, KI_T, '[settings.ki_t]\nvalue = "fast"'), "settings.ki_t.value"),
     (lambda t: _edit(t, "temps_C = [", "temps_C = [10.0, "), "tables.temps_C"),
     (lambda t: _edit(t, "[plant.driveline]", "[plant.driveline]\nwarp = 9"), "plant"),
     (lambda t: t + "\n[extra]\na = 1\n", "unknown section 'extra'"),
