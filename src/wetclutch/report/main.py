@@ -81,7 +81,8 @@ def _report_md(job: MainJob, summary: dict[str, Any]) -> str:
         + ". The response time judged is the settled one (the last entry into the band above 95 % of the steady "
         "value); the first crossing of 95 % is reported beside it. Metric definitions: `wetclutch.launch.metrics`.",
         "",
-        f"**Verdict.** Over {ver['cases']} launches on plants that vary around this one ({varied}), the launch "
+        f"**Verdict.** Over {ver['cases']} clutches that vary around this one ({varied}), each launched "
+        f"{ver['sequence']} time(s) with the controller's adaptation carried over and judged on the last launch, the launch "
         f"controller meets every requirement in **{100 * ver['pass_rate']:.1f} %** of cases. On the same "
         f"{same['samples']} samples it meets them in {100 * same['design']:.1f} %, the baseline (timed fill, "
         f"kiss-point hold, PI with anti-windup tuned by the SIMC rule on this plant) in {100 * same['baseline']:.1f} %.",
