@@ -9,7 +9,7 @@ Scenarios
     goes through synchronisation and the free oscillation after it (8 s).
 ``coupled-clutches``
     The Modelica Standard Library example ``Rotational.Examples.CoupledClutches``
-    (``shared/reference/coupled_clutches``): four unit inertias, three clutches,
+    (its regression results are the reference the tests compare with): four unit inertias, three clutches,
     1.5 s, signals every 1 ms. It does not use the rig parameters.
 """
 
