@@ -131,6 +131,11 @@ def test_launch_writes_signals_summary_plot(tmp_path):
         (["report", "--baseline-file", "nonexistent.toml"], "nonexistent.toml"),
         (["design", "--set", "hydraulics.A_p=-1"], "hydraulics.A_p"),
         (["design", "--controller", "pi"], "invalid choice"),
+        (["verify", "--sequence", "0"], "--sequence"),
+        (["report", "--sequence", "101"], "--sequence"),
+        (["launch", "--sequence", "0"], "--sequence"),
+        (["tune", "--generations", "0"], "--generations"),
+        (["tune", "--heldout-seed", "0"], "--heldout-seed"),
         (["rig", "step", "--seed", "-1"], "--seed"),
     ],
 )

@@ -196,10 +196,12 @@ def _rates(res: dict) -> str:
 
 
 def _cmd_verify(args: argparse.Namespace) -> None:
+    from .launch import loop as launch
     from .launch import ranges, verify
     from .report import verify as verify_report
 
     verify.check_options(args.samples, args.seed, args.workers)
+    launch.check_sequence(args.sequence)
     p, origin = _plant(args)
     rs = ranges.load(args.ranges)
     d = _design(args, p, origin)
@@ -215,10 +217,12 @@ def _cmd_verify(args: argparse.Namespace) -> None:
 
 def _cmd_report(args: argparse.Namespace) -> None:
     from .launch import campaign, ranges, settings, verify
+    from .launch import loop as launch
     from .report import main as report
 
     verify.check_options(args.samples, args.seed, args.workers)
     verify.check_options(args.baseline_samples, args.seed, args.workers, "--baseline-samples")
+    launch.check_sequence(args.sequence)
     p, origin = _plant(args)
     rs = ranges.load(args.ranges)
     d = settings.load(args.controller_file, "launch") if args.controller_file else _design(args, p, origin, "launch")
@@ -243,6 +247,7 @@ def _cmd_tune(args: argparse.Namespace) -> None:
 
     verify.check_options(args.samples, args.seed, args.workers)
     verify.check_options(args.heldout_samples, args.heldout_seed, args.workers, "--heldout-samples")
+    tune.check_options(args.samples, args.generations, args.popsize)
     if args.heldout_seed == args.seed:
         raise WetclutchError("--heldout-seed must differ from --seed (the held-out plants must be other plants)")
     p, origin = _plant(args)

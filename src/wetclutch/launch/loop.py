@@ -291,8 +291,7 @@ def sequence(params: Params, controller: design_.Design | str, conditions: Condi
     Launch ``i`` runs with noise seed ``conditions.seed + i``; the last result's
     ``adaptation`` is the state after the sequence.
     """
-    if not 1 <= n <= 100:
-        raise WetclutchError(f"--sequence must be in 1..100 (got {n})")
+    check_sequence(n)
     out: list[LaunchResult] = []
     learnt = adaptation
     for i in range(n):
@@ -300,3 +299,9 @@ def sequence(params: Params, controller: design_.Design | str, conditions: Condi
         learnt = res.adaptation
         out.append(res)
     return out
+
+
+def check_sequence(n: int) -> None:
+    """Refuse a sequence length outside 1..100 (one line naming the option)."""
+    if not 1 <= n <= 100:
+        raise WetclutchError(f"--sequence must be in 1..100 (got {n})")

@@ -78,6 +78,16 @@ class Tuning:
     best_rate: float = float("nan")
 
 
+def check_options(samples: int, generations: int, popsize: int) -> None:
+    """Refuse a bad training-set size, generation count or population size (one line naming the option)."""
+    if samples < 1:
+        raise WetclutchError(f"--samples must be >= 1 (got {samples})")
+    if generations < 1:
+        raise WetclutchError(f"--generations must be >= 1 (got {generations})")
+    if popsize < 2:
+        raise WetclutchError(f"--popsize must be >= 2 (got {popsize})")
+
+
 def _candidate(start: Design, names: tuple[str, ...], x: np.ndarray) -> Design:
     x = np.clip(x, -math.log(SPAN), math.log(SPAN))
     return with_settings(start, **{n: start.settings[n] * math.exp(v) for n, v in zip(names, x)})
@@ -93,12 +103,9 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
     """
     import cma
 
+    check_options(samples, generations, popsize)
     if start.kind not in TUNABLE:
         raise WetclutchError(f"no tuning for controller '{start.kind}'")
-    if samples < 1:
-        raise WetclutchError(f"--samples must be >= 1 (got {samples})")
-    if generations < 1 or popsize < 2:
-        raise WetclutchError(f"--generations must be >= 1 and --popsize >= 2 (got {generations}, {popsize})")
     names = TUNABLE[start.kind]
     path = Path(state) if state is not None else None
     if path is not None and path.is_file():

@@ -182,6 +182,7 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
     """
     global _SHARED
     check_options(n, seed, workers)
+    launch.check_sequence(sequence)
     plant = plant if plant is not None else design.plant
     rs = ranges if ranges is not None else ranges_mod.load()
     ranges_mod.check(rs, plant)
