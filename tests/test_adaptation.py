@@ -25,11 +25,30 @@ def test_a_drifted_kiss_point_is_found_and_learnt(shift, temp):
     assert runs[-1].adaptation.launches[adaptation.band(temp)] == 3
 
 
+@pytest.mark.parametrize("scale", [0.8, 1.2])
+def test_a_friction_level_off_the_design_is_learnt_and_the_next_launch_starts_from_it(scale):
+    # the controller is designed on the defaults; the clutch's friction is 20 % lower or higher. The estimate is the
+    # measured axle torque over the nominal law's at the measured pressure, so it must come out near the scale
+    plant = load(overrides={"friction.mu_scale": scale})
+    d = design.cached(Params(), "launch")
+    runs = loop.sequence(plant, d, loop.Conditions(t_ref=100.0, oil_temp_C=60.0), 3)
+    assert runs[0].summary["friction_factor_start"] is None
+    assert runs[0].summary["friction_factor_found"] == pytest.approx(scale, rel=0.1)
+    assert runs[1].summary["friction_factor_start"] == pytest.approx(runs[0].summary["friction_factor_found"])
+    learnt = runs[-1].adaptation.friction_factor(60.0)
+    assert learnt == pytest.approx(scale, rel=0.1)
+    # started from what was learnt, the response no longer waits for the estimate to converge
+    assert runs[-1].summary["t95_settled_s"] <= runs[0].summary["t95_settled_s"] + 0.01
+
+
 def test_adaptation_state_round_trips_and_bad_files_name_the_field(tmp_path):
-    a = adaptation.Adaptation().learn(41.0, 0.9e5).learn(41.0, 1.0e5).learn(85.0, 0.7e5)
+    a = adaptation.Adaptation().learn(41.0, 0.9e5).learn(41.0, 1.0e5, 1.2).learn(85.0, 0.7e5)
     assert a.kiss(45.0) == pytest.approx(0.95e5) and a.kiss(85.0) == 0.7e5 and a.kiss(10.0) is None
+    assert a.friction_factor(45.0) == 1.2 and a.friction_factor(85.0) is None
     back = adaptation.loads(a.to_toml())
     assert back == a
+    with pytest.raises(WetclutchError, match=r"band\[0\].friction_factor"):
+        adaptation.loads(a.to_toml().replace("friction_factor = 1.2", "friction_factor = 7.0"))
     bad = a.to_toml().replace("launches = 2", "launches = -2")
     with pytest.raises(WetclutchError, match=r"band\[0\].launches"):
         adaptation.loads(bad)

@@ -107,7 +107,7 @@ def test_plant_and_controller_fmus_close_the_loop_like_the_native_launch(fmus, t
     n = len(s)
     plant, pv = _slave(fmus["plant"], tmp_path)
     ctrl, cv = _slave(fmus["launch"], tmp_path)
-    oil = params.Params().rig.oil_temp_C
+    oil, ratio = params.Params().rig.oil_temp_C, params.Params().driveline.ratio
     plant_out = ["p_clutch", "T_r", "omega_p", "omega_1", "omega_r", "omega_s"]
     u_log, tr_log = np.zeros(n), np.zeros(n)
     try:
@@ -116,7 +116,8 @@ def test_plant_and_controller_fmus_close_the_loop_like_the_native_launch(fmus, t
             y = dict(zip(plant_out, plant.getReal([pv[c] for c in plant_out])))
             tr_log[k] = y["T_r"]
             t_ref = s["t_ref"].iloc[k]
-            ctrl.setReal([cv[c] for c in MEASURED] + [cv["t_ref"]], [*(y[c] for c in MEASURED[:-1]), oil, t_ref])
+            y |= {"cvt_ratio": ratio, "oil_temp": oil, "t_ref": t_ref}
+            ctrl.setReal([cv[c] for c in (*MEASURED, "t_ref")], [y[c] for c in (*MEASURED, "t_ref")])
             ctrl.doStep(t, DT)  # the controller first: its output is the input held over this step
             u_log[k] = ctrl.getReal([cv["u"]])[0]
             plant.setReal([pv["u"]], [u_log[k]])

@@ -65,3 +65,39 @@ def test_the_baseline_keeps_its_margins_over_the_corners():
     assert len(rows) == 2 ** sum(r.corner for r in ranges.load())
     # the rule never goes below SIMC's tight tuning, whose margins are the smallest
     assert min(r["gain_margin"] for r in rows) > 2.5 and min(r["phase_margin_deg"] for r in rows) > 55.0
+
+
+def test_the_launch_loops_margins_predict_where_the_simulated_launch_oscillates():
+    # a heavy clutch output (J_1 x 10) at the shortest ratio: its resonance on the axle (about 14 Hz) falls to where a
+    # fast friction-factor estimate closes a loop through it. The linear analysis and the nonlinear launch must agree
+    from wetclutch.launch import loop
+
+    plant = Params().model_copy(deep=True)
+    plant.driveline.J_1 *= 10.0
+    plant.driveline.ratio = 0.4
+    fast = designs.with_settings(designs.cached(Params(), "launch"), tau_theta=0.01)
+    slow = designs.cached(Params(), "launch")
+    cond = loop.Conditions(t_ref=150.0, oil_temp_C=60.0)
+    m_fast = margins.launch_margins(fast, plant, 60.0, 150.0)
+    m_slow = margins.launch_margins(slow, plant, 60.0, 150.0)
+    # the undamped frequency sqrt(k_a i^2 / J_1), independent of the analysis code
+    assert m_fast.resonance_hz == pytest.approx(np.sqrt(480.0 * 0.4**2 / 0.01) / (2 * np.pi), rel=1e-9)
+    # the linear loop leaves out the estimate's limits and the pressure loop's damping, so it is conservative: the fast
+    # estimate is far beyond its gain margin, the default's close to it
+    assert m_fast.gain < 0.5 and m_slow.gain > 2.0 * m_fast.gain
+    ripple_fast = loop.simulate(plant, fast, cond).summary["ripple_pct"]
+    ripple_slow = loop.simulate(plant, slow, cond).summary["ripple_pct"]
+    assert ripple_fast > 2 * metrics.REQ_RIPPLE_PCT and ripple_slow < metrics.REQ_RIPPLE_PCT
+
+
+def test_the_friction_curve_falling_with_slip_is_judder_the_loop_cannot_damp():
+    # dmu/dslip < 0 at the launch's initial slip is a negative damping F_n mu' / i^2 on the clutch output; at a high
+    # request through a short ratio with a steep curve it outweighs the axle damping
+    plant = Params().model_copy(deep=True)
+    plant.driveline.ratio, plant.friction.mu_slope = 0.4, 1.5
+    g = margins.driveline(plant, 200.0)
+    f = plant.friction
+    coef = np.polyder(np.array(f.mu_slip_poly) * 1.5)
+    assert float(coef[0] * 150.0 + coef[1]) < 0.0  # the slope itself, from the study's polynomial
+    assert float(np.real(g.poles()).max()) > 0.0
+    assert float(np.real(margins.driveline(Params(), 100.0).poles()).max()) < 0.0

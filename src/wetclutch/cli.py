@@ -242,12 +242,14 @@ def _cmd_report(args: argparse.Namespace) -> None:
 def _cmd_tune(args: argparse.Namespace) -> None:
     from rich.progress import Progress
 
+    from .launch import loop as launch
     from .launch import ranges, tune, verify
     from .report import tune as tune_report
 
     verify.check_options(args.samples, args.seed, args.workers)
     verify.check_options(args.heldout_samples, args.heldout_seed, args.workers, "--heldout-samples")
     tune.check_options(args.samples, args.generations, args.popsize)
+    launch.check_sequence(args.sequence)
     if args.heldout_seed == args.seed:
         raise WetclutchError("--heldout-seed must differ from --seed (the held-out plants must be other plants)")
     p, origin = _plant(args)
@@ -256,16 +258,17 @@ def _cmd_tune(args: argparse.Namespace) -> None:
     with Progress(disable=args.quiet) as bar:
         task = bar.add_task(f"tune {start.kind}", total=args.generations)
         res = tune.run(start, p, rs, args.samples, args.seed, args.generations, args.popsize, args.workers,
-                       args.state, on_generation=lambda g, *_: bar.update(task, completed=g))
+                       args.state, on_generation=lambda g, *_: bar.update(task, completed=g), sequence=args.sequence)
 
     def rate(design, n, seed):
-        return verify.run(design, p, n, seed, args.workers, rs, corners=False, progress=False)["pass_rate"]
+        return verify.run(design, p, n, seed, args.workers, rs, corners=False, progress=False,
+                          sequence=args.sequence)["pass_rate"]
 
     rates = {"training": {"start": rate(start, args.samples, args.seed), "tuned": rate(res.design, args.samples, args.seed)},
              "held-out": {"start": rate(start, args.heldout_samples, args.heldout_seed),
                           "tuned": rate(res.design, args.heldout_samples, args.heldout_seed)}}
     meta = {"samples": args.samples, "seed": args.seed, "heldout_samples": args.heldout_samples,
-            "heldout_seed": args.heldout_seed}
+            "heldout_seed": args.heldout_seed, "sequence": args.sequence}
     tune_report.write(res, rates, args.out, meta)
     print(f"tune {start.kind}: training {100 * rates['training']['start']:.1f} -> {100 * rates['training']['tuned']:.1f} %, "
           f"held-out {100 * rates['held-out']['start']:.1f} -> {100 * rates['held-out']['tuned']:.1f} % "
@@ -410,6 +413,8 @@ def build_parser() -> argparse.ArgumentParser:
     tun.add_argument("--heldout-seed", type=int, default=1000, metavar="S")
     tun.add_argument("--generations", type=int, default=8, metavar="G")
     tun.add_argument("--popsize", type=int, default=8, metavar="P")
+    tun.add_argument("--sequence", type=int, default=3, metavar="N",
+                     help="launches per plant, the adaptation carried over; judged on the last (default 3)")
     tun.add_argument("--state", metavar="FILE", help="save the search here after each generation; resume from it")
     tun.add_argument("--workers", type=int, metavar="W")
     tun.add_argument("--ranges", metavar="R.toml", help="what varies and how (default: the shipped ranges file)")

@@ -5,7 +5,8 @@ hold ``controller.json``: the controller's kind and its designed record. At run 
 needs a Python with ``wetclutch`` installed (see the README).
 
 Inputs: the measured channels ``p_clutch`` (Pa), ``T_r`` (N m), ``omega_p``, ``omega_1``,
-``omega_r``, ``omega_s`` (rad/s), ``oil_temp`` (C) and the request ``t_ref`` (N m); output
+``omega_r``, ``omega_s`` (rad/s), ``cvt_ratio`` (the CVT's present ratio ``w_r / w_1``; 0: unknown, the
+design's is used), ``oil_temp`` (C) and the request ``t_ref`` (N m); output
 ``u``, the valve's DC input (V); parameter ``kiss_Pa``, the kiss point it starts from.
 Each step takes one controller sample: the step size must be the sample time (``dt``),
 and the output after a step from ``t`` is the input to hold from ``t`` on (so a master
@@ -25,7 +26,7 @@ from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real, String
 from wetclutch.fmi.controller import INPUTS, Controller
 from wetclutch.fmi.plant_fmu import with_initial_unknowns
 
-UNITS = {"p_clutch": "Pa", "T_r": "N m", "oil_temp": "C", "t_ref": "N m"}
+UNITS = {"p_clutch": "Pa", "T_r": "N m", "cvt_ratio": "-", "oil_temp": "C", "t_ref": "N m"}
 
 
 class WetclutchController(Fmi2Slave):

@@ -1,11 +1,14 @@
-"""What the launch controller learns across launches: the kiss point per oil-temperature band.
+"""What the launch controller learns across launches: kiss point and friction factor per oil-temperature band.
 
 Within a launch the controller finds the real kiss point (torque onset, or a search
-upward from where it believed it; :mod:`wetclutch.launch.controller`). Across launches,
-as production transmissions do, it keeps what it found in an adaptation state per band
-of :data:`BAND_C` of oil temperature, which the next launch at that temperature starts
-from: it then fills to the right place, so it neither slams nor creeps. The state is a
-small TOML file (``launch``/``verify --sequence``, ``--adaptation``).
+upward from where it believed it) and estimates the friction factor (the measured axle
+torque over the nominal friction law's; :mod:`wetclutch.launch.controller`). Across
+launches, as production transmissions do, it keeps what it found in an adaptation state
+per band of :data:`BAND_C` of oil temperature, which the next launch at that temperature
+starts from: it then fills to the right place, so it neither slams nor creeps, and its
+feedforward asks for the right pressure from the start, so the torque loop has only
+the drift since the last launch to correct. The state is a small TOML file
+(``launch``/``verify --sequence``, ``--adaptation``).
 """
 
 from __future__ import annotations
@@ -30,29 +33,45 @@ def band(temp_C: float) -> int:
     return int((temp_C - OIL_TEMP_RANGE_C[0]) // BAND_C)
 
 
+#: the friction factor a learnt value may take (the controller's estimate is limited alike)
+FRICTION_RANGE = (0.5, 2.0)
+
+
+def _blend(old: float | None, new: float) -> float:
+    return new if old is None else old + GAIN * (new - old)
+
+
 @dataclass(frozen=True)
 class Adaptation:
-    """Learnt kiss points (Pa) and the number of launches behind each, by temperature band."""
+    """Learnt kiss points (Pa), friction factors (-) and the number of launches behind each, by temperature band."""
 
     kiss_Pa: dict[int, float] = field(default_factory=dict)
     launches: dict[int, int] = field(default_factory=dict)
+    friction: dict[int, float] = field(default_factory=dict)
 
     def kiss(self, temp_C: float) -> float | None:
         """The learnt kiss point at ``temp_C``, or None if nothing was learnt in its band."""
         return self.kiss_Pa.get(band(temp_C))
 
-    def learn(self, temp_C: float, found_Pa: float) -> Adaptation:
-        """The state after a launch at ``temp_C`` that found the kiss point at ``found_Pa``."""
+    def friction_factor(self, temp_C: float) -> float | None:
+        """The learnt friction factor at ``temp_C``, or None if nothing was learnt in its band."""
+        return self.friction.get(band(temp_C))
+
+    def learn(self, temp_C: float, found_Pa: float, friction: float | None = None) -> Adaptation:
+        """The state after a launch at ``temp_C`` that found the kiss point at ``found_Pa`` and, if it slipped long
+        enough to measure it, the friction factor ``friction``."""
         b = band(temp_C)
-        old = self.kiss_Pa.get(b)
-        new = found_Pa if old is None else old + GAIN * (found_Pa - old)
-        return Adaptation(self.kiss_Pa | {b: new}, self.launches | {b: self.launches.get(b, 0) + 1})
+        learnt = self.friction if friction is None else self.friction | {b: _blend(self.friction.get(b), friction)}
+        return Adaptation(self.kiss_Pa | {b: _blend(self.kiss_Pa.get(b), found_Pa)},
+                          self.launches | {b: self.launches.get(b, 0) + 1}, learnt)
 
     def to_toml(self) -> str:
         bands = [{"from_C": OIL_TEMP_RANGE_C[0] + b * BAND_C, "to_C": OIL_TEMP_RANGE_C[0] + (b + 1) * BAND_C,
-                  "kiss_Pa": v, "launches": self.launches.get(b, 0)} for b, v in sorted(self.kiss_Pa.items())]
-        return "# wetclutch adaptation state: kiss point learnt per oil-temperature band (Pa)\n" + tomli_w.dumps(
-            {"band_C": BAND_C, "band": bands})
+                  "kiss_Pa": v, "launches": self.launches.get(b, 0)}
+                 | ({"friction_factor": self.friction[b]} if b in self.friction else {})
+                 for b, v in sorted(self.kiss_Pa.items())]
+        return ("# wetclutch adaptation state per oil-temperature band: kiss point (Pa), friction factor (-)\n"
+                + tomli_w.dumps({"band_C": BAND_C, "band": bands}))
 
 
 def loads(text: str, source: str = "adaptation file") -> Adaptation:
@@ -63,7 +82,7 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
         raise WetclutchError(f"{source}: not valid TOML: {str(e).splitlines()[0]}") from None
     if data.get("band_C") != BAND_C:
         raise WetclutchError(f"{source}: band_C must be {BAND_C:g} (got {data.get('band_C')!r})")
-    kiss, count = {}, {}
+    kiss, count, fric = {}, {}, {}
     rows = data.get("band", [])
     if not isinstance(rows, list):
         raise WetclutchError(f"{source}: band must be an array of tables")
@@ -81,7 +100,14 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
             raise WetclutchError(f"{where}.launches: must be a whole number >= 0 (got {n!r})")
         b = band(lo + 0.5 * BAND_C)
         kiss[b], count[b] = float(v), n
-    return Adaptation(kiss, count)
+        if "friction_factor" in row:
+            f = row["friction_factor"]
+            if (isinstance(f, bool) or not isinstance(f, (int, float))
+                    or not FRICTION_RANGE[0] <= f <= FRICTION_RANGE[1]):
+                raise WetclutchError(f"{where}.friction_factor: must be a number in {FRICTION_RANGE[0]:g}.."
+                                     f"{FRICTION_RANGE[1]:g} (got {f!r})")
+            fric[b] = float(f)
+    return Adaptation(kiss, count, fric)
 
 
 def load(path: str | Path) -> Adaptation:

@@ -27,6 +27,7 @@ class MainJob:
     verify: dict[str, Any]
     verify_baseline: dict[str, Any]
     margins: list[dict[str, Any]]
+    launch_margins: list[dict[str, Any]]
 
 
 def main_job(plant: Params, design: Design, baseline: Design, ranges: list[Range] | None = None, samples: int = 1000,
@@ -54,4 +55,5 @@ def main_job(plant: Params, design: Design, baseline: Design, ranges: list[Range
     base = verify.run(baseline, plant, baseline_samples, seed, workers, ranges, progress=progress,
                       replay_args=baseline_replay_args, scheduler=scheduler, sequence=sequence)
     rs = ranges if ranges is not None else load_ranges()
-    return MainJob(plant, design, baseline, launches, ver, base, margins.over_corners(baseline, plant, rs))
+    return MainJob(plant, design, baseline, launches, ver, base, margins.over_corners(baseline, plant, rs),
+                   margins.launch_over_corners(design, plant, rs))

@@ -94,9 +94,11 @@ _inline = njit(cache=True, error_model="numpy", _nrt=False, inline="always")
 
 CONTROLLERS = ("launch", "baseline")
 
-#: measured channels, in the order the closed loop passes them (SI; oil temperature in C)
-MEASURED = ("p_clutch", "T_r", "omega_p", "omega_1", "omega_r", "omega_s", "oil_temp")
-M_P, M_TR, M_WP, M_W1, M_WR, M_WS, M_TEMP = range(len(MEASURED))
+#: measured channels, in the order the closed loop passes them (SI; oil temperature in C). ``cvt_ratio`` is
+#: the CVT's present speed ratio ``w_r / w_1``, which the transmission's own control sets and knows (at
+#: standstill no speed can show it); 0 means unknown, and the design's ratio is used.
+MEASURED = ("p_clutch", "T_r", "omega_p", "omega_1", "omega_r", "omega_s", "cvt_ratio", "oil_temp")
+M_P, M_TR, M_WP, M_W1, M_WR, M_WS, M_RATIO, M_TEMP = range(len(MEASURED))
 
 # --- controller record: common fields
 KIND, DT, U_MIN, U_MAX = range(4)
@@ -104,18 +106,26 @@ LAUNCH, BASELINE = 0, 1
 # launch controller
 (P_KISS, HOLD_OFFSET, FILL_EXIT, A_P, RATIO, ETA, MU2, MU1, MU0, F_KNEE, KP_P, KI_P, KP_T, KI_T, P_MAX, TAU_REF,
  HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, HOLD_LEAD, FILL_EXIT_COLD, FF_T0, FF_DT,
- FF_NT, FF_P0, FF_DP, FF_NP, KI_HOLD, DITHER_AMP_T, DITHER_HALF_T, FF_SHIFT_T, REQ_LEAD) = range(4, 41)
+ FF_NT, FF_P0, FF_DP, FF_NP, KI_HOLD, DITHER_AMP_T, DITHER_HALF_T, FF_SHIFT_T, REQ_LEAD, KD_P) = range(4, 42)
 # baseline: its PI gains (V/N m, V/(N m s)) and the fill time (s) at each feedforward temperature
-KP_B, KI_B = 41, 42
-FILL_T = 43
+KP_B, KI_B = 42, 43
+FILL_T = 44
 N_FILL_T = 5
 FF_TABLE = FILL_T + N_FILL_T  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
 N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power first
 
 # --- controller state
 (CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED, CS_KISS,
- CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF) = range(19)
-N_CS = 19
+ CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF, CS_THETA_START, CS_THETA_N, CS_THETA_LEARNT, CS_DPF,
+ CS_PPREV) = range(24)
+N_CS = 24
+#: time constant of the filtered derivative of the measured pressure (s): it passes the valve's own pressure
+#: oscillation (20 to 40 Hz) and smooths the sensor's noise
+TAU_DP = 0.002
+#: friction-factor estimates (samples) behind a value worth learning for the next launch, and the count at which
+#: the value is taken: early in the slip phase, at the slip at which the next launch's response is made
+THETA_LEARN_N = 50
+THETA_LEARN_AT = 300
 #: samples of a calm, risen pressure (above ARM_P, rising less than ARM_RISE) before a steep rise counts as contact:
 #: the jump from empty to the reset spring's prestress at the start of the fill is not one; the stroke's ramp is calm
 ARM_N = 20
@@ -159,16 +169,22 @@ def _table(ctrl, temp, p):
 
 
 @_inline
+def _ratio(ctrl, meas):
+    """The CVT ratio: the measured one, or the design's when it is unknown (0)."""
+    return meas[M_RATIO] if meas[M_RATIO] > 0.0 else ctrl[RATIO]
+
+
+@_inline
 def _mu(ctrl, slip):
     return max(friction.mu(ctrl[MU2:MU0 + 1], slip), 1e-4)
 
 
 @_inline
-def _pressure_target(ctrl, kiss, t_ref, slip, theta):
+def _pressure_target(ctrl, kiss, t_ref, slip, theta, ratio):
     """Pressure (Pa) that gives axle torque ``t_ref`` under the nominal friction law scaled by ``theta``, with the
-    plates touching at ``kiss``."""
+    plates touching at ``kiss`` and the CVT at ``ratio``."""
     mu = _mu(ctrl, slip) * theta
-    t_c = max(t_ref, 0.0) * ctrl[RATIO] / ctrl[ETA]
+    t_c = max(t_ref, 0.0) * ratio / ctrl[ETA]
     f_n = friction.force_for(t_c / mu, ctrl[F_KNEE])
     return kiss + f_n / ctrl[A_P]
 
@@ -195,9 +211,12 @@ def _friction_estimate(ctrl, cs, meas, p, slip, dt):
     plates press hard enough for the ratio to mean something."""
     f_n = friction.normal_force(p, cs[CS_KISS], ctrl[A_P])
     if f_n > ctrl[F_KNEE] * 1.5:
-        t_model = ctrl[ETA] / ctrl[RATIO] * _mu(ctrl, slip) * f_n * friction.knee(f_n, ctrl[F_KNEE])
+        t_model = ctrl[ETA] / _ratio(ctrl, meas) * _mu(ctrl, slip) * f_n * friction.knee(f_n, ctrl[F_KNEE])
         theta = min(max(meas[M_TR] / t_model, 0.5), 2.0)
         cs[CS_THETA] += (theta - cs[CS_THETA]) * dt / (ctrl[TAU_THETA] + dt)
+        cs[CS_THETA_N] += 1.0
+        if cs[CS_THETA_N] <= THETA_LEARN_AT:
+            cs[CS_THETA_LEARNT] = cs[CS_THETA]
 
 
 @_inline
@@ -217,11 +236,12 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     e_t = r - meas[M_TR]
     # slip from the secondary flywheel, not from omega_1: the light CVT input shakes
     # with the clutch torque, and feeding that back through mu(slip) closes a fast loop
-    slip = meas[M_WP] - meas[M_WS] / ctrl[RATIO]
+    ratio = _ratio(ctrl, meas)
+    slip = meas[M_WP] - meas[M_WS] / ratio
     _friction_estimate(ctrl, cs, meas, p, slip, dt)
     th = cs[CS_THETA]
-    p_r = _pressure_target(ctrl, cs[CS_KISS], r, slip, th)
-    sens = _pressure_target(ctrl, cs[CS_KISS], r + 1.0, slip, th) - p_r  # Pa per N m
+    p_r = _pressure_target(ctrl, cs[CS_KISS], r, slip, th, ratio)
+    sens = _pressure_target(ctrl, cs[CS_KISS], r + 1.0, slip, th, ratio) - p_r  # Pa per N m
     p_set = p_r + cs[CS_ZT] + ctrl[KP_T] * sens * e_t
     p_set = min(max(p_set, p_hold), ctrl[P_MAX])
     if gated:
@@ -246,7 +266,10 @@ def _pressure_loop(ctrl, cs, p_set, p, temp, hold, dt):
     # with the torque dither wider than the magnet's play the iron follows the mean
     # current, not the rising branch the map was measured on: shift the map by the play
     shift = 0.0 if hold else ctrl[FF_SHIFT_T]
-    u = _table(ctrl, temp, p_set) - shift + cs[CS_ZP] + kp * e_p
+    # the valve regulates the pressure through a slow (damped) stem and the clutch volume, an integrator: the
+    # lag of a stiffly damped stem leaves that loop underdamped, and feedback of the pressure's rate damps it
+    damp = 0.0 if hold else ctrl[KD_P] * cs[CS_DPF]
+    u = _table(ctrl, temp, p_set) - shift + cs[CS_ZP] + kp * e_p - damp
     if hold and cs[CS_PF] < cs[CS_KISS]:
         # the piston still strokes: the flow it takes makes the pressure droop below the
         # valve's static equilibrium, and an integrator wound up against that droop slams
@@ -301,8 +324,9 @@ def _find_kiss(ctrl, cs, meas, t_ref, phase, dt):
         cs[CS_KISS] = cs[CS_PF] - JUMP / 3.0
         cs[CS_FOUND] = 1.0
     elif phase != FILL and cs[CS_TF] - cs[CS_TREF] > ONSET_NM:
-        slip = meas[M_WP] - meas[M_WS] / ctrl[RATIO]
-        cs[CS_KISS] = cs[CS_PF] - _pressure_target(ctrl, 0.0, ONSET_NM, slip, 1.0)
+        ratio = _ratio(ctrl, meas)
+        slip = meas[M_WP] - meas[M_WS] / ratio
+        cs[CS_KISS] = cs[CS_PF] - _pressure_target(ctrl, 0.0, ONSET_NM, slip, 1.0, ratio)
         cs[CS_FOUND] = 1.0
     elif phase == HOLD and t_ref <= 0.0 and cs[CS_DIP] <= 0.0 and cs[CS_PF] > cs[CS_KISS] - SEARCH_LEAD:
         cs[CS_KISS] = min(cs[CS_KISS] + SEARCH_RATE * dt, ctrl[P_KISS] + SEARCH_SPAN)
@@ -320,6 +344,9 @@ def _launch(ctrl, cs, meas, t_ref):
     cs[CS_PF] = p if first else cs[CS_PF] + (p - cs[CS_PF]) * dt / (0.02 + dt)
     cs[CS_TF] = meas[M_TR] if first else cs[CS_TF] + (meas[M_TR] - cs[CS_TF]) * dt / (0.02 + dt)
     cs[CS_PF5] = p if first else cs[CS_PF5] + (p - cs[CS_PF5]) * dt / (0.005 + dt)
+    rate = 0.0 if first else (p - cs[CS_PPREV]) / dt
+    cs[CS_DPF] += (rate - cs[CS_DPF]) * dt / (TAU_DP + dt)
+    cs[CS_PPREV] = p
     _find_kiss(ctrl, cs, meas, t_ref, phase, dt)
     p_hold = cs[CS_KISS] + ctrl[HOLD_OFFSET]
     if phase == FILL:
@@ -352,7 +379,8 @@ def _launch(ctrl, cs, meas, t_ref):
     if phase == HOLD and t_ref > 0.0:
         phase = TORQUE
         cs[CS_REF] = 0.0
-        cs[CS_THETA] = ctrl[THETA0]
+        # the friction factor learnt on earlier launches at this temperature, if any (the loop sets it)
+        cs[CS_THETA] = cs[CS_THETA_START] if cs[CS_THETA_START] > 0.0 else ctrl[THETA0]
     if phase == TORQUE and abs(meas[M_WP] - meas[M_W1]) < SYNC_SLIP and meas[M_W1] > 0.0:
         # synchronised: the clutch can carry no more torque; close it firmly
         phase = LOCKUP
@@ -457,7 +485,7 @@ def pack(kind: str, s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pres
              DITHER_AMP: "dither_amp", DITHER_HALF: "dither_half", KP_HOLD: "kp_hold", DIP: "dip", DIP_N: "dip_n",
              HOLD_LEAD: "hold_lead", FILL_EXIT_COLD: "fill_exit_cold", KI_HOLD: "ki_hold",
              DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque", FF_SHIFT_T: "ff_shift",
-             REQ_LEAD: "req_lead"}
+             REQ_LEAD: "req_lead", KD_P: "kd_p"}
     baseline = {P_KISS: "p_kiss", HOLD_OFFSET: "hold_offset", DIP: "dip", DIP_N: "dip_n", KP_B: "kp", KI_B: "ki",
                 DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque"}
     for slot, name in (launch if kind == "launch" else baseline).items():

@@ -55,8 +55,8 @@ _P = (0.0, 5e6)
 #: the launch controller's settings that every plant shares, with their values
 LAUNCH_DEFAULTS = {
     "hold_offset": 0.02e5, "fill_exit": 0.1e5, "fill_exit_cold": 0.05e5, "hold_rate": 1.0e5, "hold_lead": 0.01e5,
-    "req_lead": 0.2e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
-    "ki_t": 3.9, "tau_ref": 0.034, "tau_theta": 0.01, "theta0": 3.55, "dither_amp": 0.05, "dither_hz": 125.0,
+    "req_lead": 0.2e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kd_p": 1.0e-8, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
+    "ki_t": 3.9, "tau_ref": 0.034, "tau_theta": 0.05, "theta0": 1.0, "dither_amp": 0.05, "dither_hz": 125.0,
     "dither_amp_torque": 0.3, "dither_hz_torque": 125.0, "ff_shift_torque": 1.0, "dip": 0.5, "dip_time": 0.015,
 }
 #: the defaults that came from ``wetclutch tune`` on the default rig (CMA-ES, 40 training plants of the shipped
@@ -90,6 +90,7 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "req_lead": Setting("Pa", *_P, "a request during the fill asks this far above the hold pressure"),
         "kp_p": Setting("V/Pa", 0.0, 1.0, "pressure loop, proportional gain, once torque is requested"),
         "ki_p": Setting("V/(Pa s)", 0.0, 1.0, "pressure loop, integral gain, once torque is requested"),
+        "kd_p": Setting("V s/Pa", 0.0, 1.0, "pressure loop, gain on the pressure's rate (damping), once torque is requested"),
         "kp_hold": Setting("V/Pa", 0.0, 1.0, "pressure loop, proportional gain, in the hold"),
         "ki_hold": Setting("V/(Pa s)", 0.0, 1.0, "pressure loop, integral gain, in the hold"),
         "kp_t": Setting("-", 0.0, 100.0, "torque loop, proportional gain (per nominal pressure per N m)"),

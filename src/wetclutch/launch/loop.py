@@ -44,8 +44,8 @@ PROFILES = ("step", "ramp")
 RAMP_TIME = 0.3  # s: a ``ramp`` request rises over this time
 N_CH = len(control.MEASURED)
 
-#: where the loop finds the measured quantities: state indices (pressure, speeds) and the axle spring,
-#: in the slots of the controller's measured channels (the oil temperature is a constant of the run)
+#: where the loop finds the measured quantities: state indices (pressure, speeds), the axle spring and the CVT
+#: gear, in the slots of the controller's measured channels (the oil temperature is a constant of the run)
 N_PROBE = N_CH - 1
 
 
@@ -57,6 +57,7 @@ def _probe(rn: clutch.RigNetwork) -> np.ndarray:
     probe[control.M_TR] = next(i for i, s in enumerate(net.springs) if s.name == "axle")
     probe[control.M_WP], probe[control.M_W1] = body["p"], body["1"]
     probe[control.M_WR], probe[control.M_WS] = body["r"], body["s"]
+    probe[control.M_RATIO] = next(i for i, g in enumerate(net.gears) if g.name == "cvt")
     return probe
 
 
@@ -66,6 +67,7 @@ def _true_values(net, x, probe, temp, truth):
     truth[control.M_TR] = spring_torque(net, probe[control.M_TR], x)[0]
     for c in (control.M_WP, control.M_W1, control.M_WR, control.M_WS):
         truth[c] = x[probe[c]]
+    truth[control.M_RATIO] = net.gr_ratio[probe[control.M_RATIO]]
     truth[control.M_TEMP] = temp
 
 
@@ -233,6 +235,8 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     learnt = adaptation or Adaptation()
     start = learnt.kiss(temp) if d.kind == "launch" else None
     cs[control.CS_KISS] = d.settings["p_kiss"] if start is None else start
+    if d.kind == "launch":
+        cs[control.CS_THETA_START] = learnt.friction_factor(temp) or 0.0
     status, m = _closed_loop(net, ext, ws, 0, probe, temp, sensors, noise, ctrl, cs, t_ref, cond.dt, cond.t_after,
                              *out, out_meas, out_u)
     if status != OK:
@@ -264,8 +268,12 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     found = float(cs[control.CS_KISS]) if d.kind == "launch" and cs[control.CS_FOUND] else None
     kiss_start = (d.settings["p_kiss"] if start is None else start) if d.kind == "launch" else None
     summary.update(kiss_start_Pa=kiss_start, kiss_found_Pa=found)
+    friction = (float(cs[control.CS_THETA_LEARNT]) if d.kind == "launch" and cs[control.CS_THETA_N] >= control.THETA_LEARN_N
+                else None)
+    summary.update(friction_factor_start=learnt.friction_factor(temp) if d.kind == "launch" else None,
+                   friction_factor_found=friction)
     if found is not None:
-        learnt = learnt.learn(temp, found)
+        learnt = learnt.learn(temp, found, friction)
     return LaunchResult(signals, truth, summary, cond, d.kind, tr.stats, found, learnt)
 
 

@@ -38,7 +38,7 @@ from .design import Design, with_settings
 from .ranges import Range
 
 #: the gains each kind's tuning searches
-TUNABLE = {"launch": ("ki_t", "kp_p", "ki_p", "tau_ref", "theta0"), "baseline": ("kp", "ki")}
+TUNABLE = {"launch": ("ki_t", "kp_p", "ki_p", "kd_p", "tau_ref", "tau_theta"), "baseline": ("kp", "ki")}
 #: each gain stays within this factor of the design's value
 SPAN = 5.0
 N_TRAIN = 40
@@ -95,8 +95,11 @@ def _candidate(start: Design, names: tuple[str, ...], x: np.ndarray) -> Design:
 
 def run(start: Design, plant: Params | None = None, ranges: list[Range] | None = None, samples: int = N_TRAIN,
         seed: int = 0, generations: int = 8, popsize: int = 8, workers: int | None = None,
-        state: str | Path | None = None, on_generation: Callable[[int, float, float], None] | None = None) -> Tuning:
+        state: str | Path | None = None, on_generation: Callable[[int, float, float], None] | None = None,
+        sequence: int = 1) -> Tuning:
     """Tune ``start``'s gains (:data:`TUNABLE`) on ``samples`` training plants drawn with ``seed``.
+
+    ``sequence``: launches per training plant, the adaptation carried over, judged on the last (as ``verify``).
 
     ``state``: a file the search is saved to after each generation and resumed from if it
     exists. ``on_generation(generation, best score, best pass rate)`` reports progress.
@@ -125,7 +128,7 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
         scores, rates = [], []
         for x in xs:
             res = verify.run(_candidate(start, names, np.asarray(x)), plant, samples, seed, workers, ranges,
-                             corners=False, progress=False)
+                             corners=False, progress=False, sequence=sequence)
             scores.append(score(res))
             rates.append(res["pass_rate"])
         es.tell(xs, scores)
@@ -141,7 +144,8 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
             tmp.replace(path)
         if on_generation is not None:
             on_generation(len(tuning.history), tuning.best_score, tuning.best_rate)
-    sources = {n: f"tuned: CMA-ES on {samples} training plants (seed {seed}), tail score {tuning.best_score:.3f}"
+    sources = {n: f"tuned: CMA-ES on {samples} training plants (seed {seed}, {sequence} launches each), "
+                  f"tail score {tuning.best_score:.3f}"
                for n in names}
     tuning.design = Design(tuning.design.kind, tuning.design.plant, tuning.design.settings,
                            tuning.design.sources | sources, tuning.design.temps_C, tuning.design.pressures_Pa,

@@ -41,7 +41,8 @@ def write(job: MainJob, out: str | Path) -> dict[str, Any]:
         (d / "baseline.toml").write_text(to_toml(job.baseline))
         summary = {"nominal": [{"design": a.summary, "baseline": b.summary} for a, b in launches],
                    "verify": {k: ver[k] for k in keys}, "verify_baseline": {k: base[k] for k in keys},
-                   "same_samples": same_samples(ver, base), "baseline_margins": job.margins}
+                   "same_samples": same_samples(ver, base), "baseline_margins": job.margins,
+                   "launch_margins": job.launch_margins}
         write_json(d / "summary.json", summary)
         md = _report_md(job, summary)
         (d / "report.md").write_text(md)
@@ -62,6 +63,32 @@ def _margins_md(rows: list[dict[str, Any]]) -> str:
             f"**{p['phase_margin_deg']:.0f} deg** (at {where(p)}) over the {len(rows)} corners. What fails in the "
             "verification therefore fails in the nonlinear parts the linear loop leaves out (fill, kiss point, "
             "valve play), not by instability of the torque loop.")
+
+
+def _launch_margins_md(rows: list[dict[str, Any]]) -> str:
+    """Markdown: the launch controller's loop margins over the loop's corners, the smallest and where, and the
+    corners whose driveline is unstable by itself (friction falling with slip: judder no pressure loop damps)."""
+    if not rows:
+        return "(no corner ranges)"
+    where = lambda r: ", ".join(f"{k} {v:g}" for k, v in r["corner"].items())  # noqa: E731
+    judder = [r for r in rows if r["damping"] <= 0.0]
+    stable = [r for r in rows if r["damping"] > 0.0]
+    text = ("The torque loop of the launch controller linearised about the launch's start (`wetclutch.launch.margins`: "
+            "the valve's pressure path as a first-order-plus-dead-time fit on each corner plant, the clutch output's "
+            "resonance on the axle seen through the ratio with the friction curve's damping, the friction-factor "
+            "estimate and the torque integrator)")
+    if stable:
+        g = min(stable, key=lambda r: r["gain_margin"])
+        p = min(stable, key=lambda r: r["phase_margin_deg"])
+        text += (f" keeps a gain margin of at least **{g['gain_margin']:.2f}** (at {where(g)}; resonance "
+                 f"{g['resonance_hz']:.1f} Hz, damping ratio {g['damping']:.2f}) and a phase margin of at least "
+                 f"**{p['phase_margin_deg']:.0f} deg** (at {where(p)}) over {len(stable)} of the {len(rows)} corners.")
+    if judder:
+        w = min(judder, key=lambda r: r["damping"])
+        text += (f" At {len(judder)} corners the driveline is unstable by itself: friction falling with slip outweighs "
+                 f"the axle damping (damping ratio down to {w['damping']:.2f}, at {where(w)}); there the launch "
+                 "judders whatever the torque loop does, until the slip has fallen below the friction curve's peak.")
+    return text
 
 
 def _fmt(v: Any, f: str) -> str:
@@ -107,7 +134,8 @@ def _report_md(job: MainJob, summary: dict[str, Any]) -> str:
               "### Where it fails: pass rate per range bin", "", bins_table(ver), "",
               "![histograms](verify_launch.png)", "",
               "## Verification: baseline", "", verify_table(base), "", "![histograms](verify_baseline.png)", "",
-              "### The baseline's loop margins over the corner plants", "", _margins_md(job.margins), "",
+              "### Loop margins over the corner plants", "", "Launch controller: " + _launch_margins_md(job.launch_margins),
+              "", "Baseline: " + _margins_md(job.margins), "",
               "## The designs", "", design_md(job.design), design_md(job.baseline),
               "The controllers are in `controller.toml` and `baseline.toml` (`wetclutch launch --controller-file`).", ""]
     return "\n".join(lines)

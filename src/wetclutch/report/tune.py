@@ -21,7 +21,8 @@ def write(tuning: Tuning, rates: dict[str, dict[str, float]], out: str | Path, m
                                      "history": t.history, "pass_rates": rates, **meta})
         lines = [f"# Tuning of the {t.design.kind} controller", "",
                  f"CMA-ES over the logarithms of {', '.join(t.names)} (each within a factor 5 of the design), scored on "
-                 f"{meta['samples']} training plants (seed {meta['seed']}) by (1 - pass rate) + 0.03 x the mean of the "
+                 f"{meta['samples']} training plants (seed {meta['seed']}; each launched {meta.get('sequence', 1)} times, the "
+                 f"adaptation carried over, judged on the last) by (1 - pass rate) + 0.03 x the mean of the "
                  f"worst 10 % of the samples' largest requirement violation; verified on {meta['heldout_samples']} held-out "
                  f"plants (seed {meta['heldout_seed']}).", "",
                  "| pass rate, all requirements | designed | tuned |", "|---|---|---|"]
