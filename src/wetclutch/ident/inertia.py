@@ -16,13 +16,14 @@ An inertia counts as identified when its standard error is below
 :data:`REL_SE_MAX` of its value; else the data do not excite it.
 
 Before the balances are formed, each channel is passed through the other
-channels' sensor filters (:data:`wetclutch.rig.sensors.DEFAULT_SENSORS`), so that
+channels' (distinct) sensor filters (:data:`wetclutch.rig.sensors.DEFAULT_SENSORS`), so that
 torque and speeds carry the same filtering.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from scipy import signal
@@ -36,6 +37,7 @@ from .recordings import Recording
 REL_SE_MAX = 0.1  # largest standard error, relative to the value, of an identified inertia
 W_MIN = 2.0  # rad/s: speed sensors read 0 below about 1 rad/s; the balances use faster samples only
 INTERVAL = 0.05  # s: the balances are integrated over intervals this long
+SMOOTH_HZ = 20.0  # Hz: a low-pass common to all channels against the speeds' noise (ring-out and slip are slower)
 SPEEDS = ("omega_p", "omega_1", "omega_s")
 
 
@@ -53,18 +55,26 @@ class InertiaFit:
     t1: float
 
 
+@lru_cache(maxsize=16)
+def _lowpass(cutoffs_hz: tuple[float, ...], fs: float) -> np.ndarray:
+    """Second-order Butterworth low-passes in series, as second-order sections."""
+    return np.vstack([signal.butter(2, fc, fs=fs, output="sos") for fc in cutoffs_hz])
+
+
 def _same_filtering(rec: Recording, names: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """``names``' channels, each filtered by the sensor filters of all the others (one common filter)."""
+    """``names``' channels, each passed through the sensor filters of the others that it has not had (the
+    distinct cut-offs but its own) and through :data:`SMOOTH_HZ`: all then carry one common filtering."""
     fs = 1.0 / rec.dt
-    cutoffs = {c: DEFAULT_SENSORS[c].cutoff_hz for c in names if c in DEFAULT_SENSORS}
+    cutoff = {c: DEFAULT_SENSORS[c].cutoff_hz if c in DEFAULT_SENSORS else None for c in names}
+    distinct = {fc for fc in cutoff.values() if fc is not None and fc < 0.5 * fs}
     out = {}
-    for c in names:
-        x = rec.data[c]
-        for other, fc in cutoffs.items():
-            if other != c and fc is not None and fc < 0.5 * fs:
-                sos = signal.butter(2, fc, fs=fs, output="sos")
-                x = signal.sosfilt(sos, x, zi=signal.sosfilt_zi(sos) * x[0])[0]
-        out[c] = x
+    for own in set(cutoff.values()):
+        group = [c for c in names if cutoff[c] == own]
+        sos = _lowpass((*sorted(distinct - {own}), SMOOTH_HZ), fs)
+        x = np.array([rec.data[c] for c in group])
+        # start in steady state: the rig's filters had run long before the recording
+        y, _ = signal.sosfilt(sos, x, zi=signal.sosfilt_zi(sos)[:, None, :] * x[None, :, :1])
+        out |= dict(zip(group, y))
     return out
 
 
