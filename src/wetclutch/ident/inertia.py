@@ -9,15 +9,18 @@ every phase of a run, slipping or locked, without the clutch torque:
   CVT's input torque with ``c = 1/eta`` while power flows forward
   (``T_r w_r > 0``) and ``c = eta`` back.
 
-Both are linear in the inertias: least squares over the samples of a run. In
-the slip phase ``w_p`` and ``w_1`` move apart and separate ``J_p`` from ``J_1``;
-locked, only their sum shows. The drag coefficients and ``eta`` are the prior's.
-An inertia counts as identified when its standard error is below
-:data:`REL_SE_MAX` of its value; else the data do not excite it.
+Both are linear in the inertias. Integrated over short intervals they say that
+each speed's change times its inertia equals the torque's integral: least
+squares over the intervals of a run. In the slip phase ``w_p`` and ``w_1`` move
+apart and separate ``J_p`` from ``J_1``; locked, only their sum shows. The drag
+coefficients and ``eta`` are the prior's, the ratio the run's. An inertia counts
+as identified when its standard error is below :data:`REL_SE_MAX` of its value;
+else the data do not excite it. The ring-out frequency then gives the axle
+stiffness with these inertias (:func:`wetclutch.ident.result.identified_values`).
 
 Before the balances are formed, each channel is passed through the other
-channels' (distinct) sensor filters (:data:`wetclutch.rig.sensors.DEFAULT_SENSORS`), so that
-torque and speeds carry the same filtering.
+channels' (distinct) sensor filters (:data:`wetclutch.rig.sensors.DEFAULT_SENSORS`)
+and a common low-pass, so that torque and speeds carry the same filtering.
 """
 
 from __future__ import annotations
@@ -39,14 +42,15 @@ W_MIN = 2.0  # rad/s: speed sensors read 0 below about 1 rad/s; the balances use
 INTERVAL = 0.05  # s: the balances are integrated over intervals this long
 SMOOTH_HZ = 20.0  # Hz: a low-pass common to all channels against the speeds' noise (ring-out and slip are slower)
 SPEEDS = ("omega_p", "omega_1", "omega_s")
+J_P_HELD = "J_p with J_1 held"  # key of InertiaFit.values: J_p fitted with J_1 at the prior's
 
 
 @dataclass(frozen=True)
 class InertiaFit:
     """Least-squares inertias of one clutch run.
 
-    ``values`` maps ``J_p``, ``J_1``, ``J_s`` (those the run has samples for) to
-    ``(value, standard error)`` in kg m^2.
+    ``values`` maps ``J_p``, ``J_1`` (fitted together), :data:`J_P_HELD` and ``J_s``
+    (those the run has samples for) to ``(value, standard error)`` in kg m^2.
     """
 
     rec: Recording
@@ -127,11 +131,10 @@ def inertias(rec: Recording, prior: Params, ratio: float) -> InertiaFit | None:
         y = over(integral(-c * ratio * T - dr.b_1 * w_p * np.abs(w_p)))[ok]
         X = np.column_stack([over(d["omega_p"]), over(d["omega_1"])])[ok]
         coef, se = _lstsq(X, y)
-        values["J_1"] = (float(coef[1]), float(se[1]))
-        if not excited(*values["J_1"]):
-            # J_1 not excited: hold it at the prior's and fit J_p alone
-            coef, se = _lstsq(X[:, :1], y - dr.J_1 * X[:, 1])
-        values["J_p"] = (float(coef[0]), float(se[0]))
+        values["J_p"], values["J_1"] = (float(coef[0]), float(se[0])), (float(coef[1]), float(se[1]))
+        # for runs that do not excite J_1 (together): J_p with J_1 held at the prior's
+        coef, se = _lstsq(X[:, :1], y - dr.J_1 * X[:, 1])
+        values[J_P_HELD] = (float(coef[0]), float(se[0]))
         used |= ok
     if "omega_s" in d and np.count_nonzero(ok := usable("omega_s")) >= 20:
         w_s = d["omega_s"]

@@ -7,8 +7,13 @@ or a small record per run). :func:`identify` runs all estimators that the
 recordings support:
 
 * torque onset after a command step: dead time and contact pressure (:func:`onset`);
+* the CVT ratio from the speeds (:func:`measured_ratio`); where the CVT input turns
+  too slowly for the speed sensors, the ratio the rig was set to (``meta.json``) or
+  the prior's, noted as such;
 * friction versus slip from the slip phase of clutch runs (:func:`friction`), also
   binned by pressure and by oil temperature;
+* the inertias ``J_p``, ``J_1``, ``J_s`` from the torque and speed balances of clutch
+  runs (:func:`inertias`), where the data excite them;
 * static pressure versus command on the plateaus of steps and staircases, with the
   hysteresis between up and down staircases (:func:`static_gain`, :func:`hysteresis`);
 * low-order pressure models fitted to steps and relaxations (:func:`step_models`)
@@ -37,7 +42,7 @@ from ..physics import actuator
 from .dynamics import frequency_response, step_models
 from .estimate import Estimate, source, weighted_mean
 from .friction import SLIP_MIN, W_RATIO, commanded_ratio, friction, measured_ratio, slip_samples
-from .inertia import REL_SE_MAX, InertiaFit, excited, inertias
+from .inertia import J_P_HELD, REL_SE_MAX, InertiaFit, excited, inertias
 from .onset import onset
 from .recordings import Recording
 from .result import Identification, identified_params
@@ -55,8 +60,9 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
     recordings
         Checked recordings (:func:`wetclutch.ident.recordings.load`).
     prior
-        Parameters not identified here (piston area, efficiency, friction knee,
-        inertias ...) and the base of the identified parameter set; defaults if None.
+        Parameters not identified here (piston area, efficiency, friction knee ...,
+        and those the recordings do not determine) and the base of the identified
+        parameter set; defaults if None.
     mu_order
         Order of the ``mu(slip)`` polynomial.
     progress
@@ -159,16 +165,22 @@ def _ratios(runs: Sequence[Recording], prior: Params, est: dict[str, Estimate],
 def _inertias(fits: Sequence[InertiaFit], runs: Sequence[Recording], est: dict[str, Estimate],
               notes: dict[str, tuple[Any, str]]) -> None:
     """Combine the runs' inertias into estimates where the data excite them; else note why the prior stays."""
-    for name in ("J_p", "J_1", "J_s"):
-        path = f"driveline.{name}"
+    def combined(name: str) -> tuple[float, float, list[InertiaFit]]:
         have = [f for f in fits if name in f.values]
+        if not have:
+            return float("nan"), float("nan"), have
+        return (*weighted_mean(np.array([f.values[name][0] for f in have]),
+                               np.array([f.values[name][1] for f in have])), have)
+
+    j1_excited = excited(*combined("J_1")[:2])
+    for name, key in (("J_1", "J_1"), ("J_p", "J_p" if j1_excited else J_P_HELD), ("J_s", "J_s")):
+        path = f"driveline.{name}"
+        m, se, have = combined(key)
         if not have:
             why = ("no clutch runs" if not runs else "no omega_s channel" if name == "J_s" and not any(
                 "omega_s" in r.data for r in runs) else "no stretch of the clutch runs with every speed measured")
             notes[path] = (None, why)
-            continue
-        m, se = weighted_mean(np.array([f.values[name][0] for f in have]), np.array([f.values[name][1] for f in have]))
-        if excited(m, se):
+        elif excited(m, se):
             est[name] = Estimate(m, se, "kg m^2", [source(f.rec, f.t0, f.t1) for f in have])
         else:
             notes[path] = (None, f"not excited by the data: {m:.3g} ± {se:.2g} kg m^2 "
