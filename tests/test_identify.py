@@ -523,7 +523,8 @@ def test_the_chain_on_a_clutch_unlike_the_defaults(tmp_path):
     sets = [a for k, v in ODD.items() for a in ("--set", f"{k}={v}")]
     files = []
     for name, level, temp, seed in (("cold", "1.8", "41", "1"), ("warm", "2.5", "85", "2")):
-        r = _cli("rig", "step", "--level", level, "--oil-temp", temp, "--seed", seed, *sets, "--out", str(tmp_path / name))
+        r = _cli("rig", "step", "--level", level, "--oil-temp", temp, "--seed", seed, *sets,
+                 "--out", str(tmp_path / name))
         assert r.returncode == 0, r.stderr
         files.append(str(tmp_path / name / "measured.mf4"))
     out = tmp_path / "id"
@@ -534,7 +535,8 @@ def test_the_chain_on_a_clutch_unlike_the_defaults(tmp_path):
     assert got.driveline.J_p == pytest.approx(1.8, rel=0.02) and got.driveline.J_s == pytest.approx(4.0, rel=0.02)
     assert actuator.contact_pressure(got) == pytest.approx(actuator.contact_pressure(true), abs=0.05e5)
     w = np.linspace(20.0, 120.0, 30)
-    assert np.max(np.abs(np.polyval(got.friction.mu_slip_poly, w) / np.polyval(ODD["friction.mu_slip_poly"], w) - 1)) < 0.03
+    mu_true = np.polyval(ODD["friction.mu_slip_poly"], w)
+    assert np.max(np.abs(np.polyval(got.friction.mu_slip_poly, w) / mu_true - 1)) < 0.03
     report = (out / "report.md").read_text()
     assert "| driveline.J_p | identified |" in report and "| driveline.J_1 | prior | not excited by the data" in report
     des = _cli("design", "--param-file", str(out / "params.toml"), "--out", str(tmp_path / "design"))

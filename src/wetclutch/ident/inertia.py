@@ -70,12 +70,15 @@ def _same_filtering(rec: Recording, names: tuple[str, ...]) -> dict[str, np.ndar
     distinct cut-offs but its own) and through :data:`SMOOTH_HZ`: all then carry one common filtering."""
     fs = 1.0 / rec.dt
     cutoff = {c: DEFAULT_SENSORS[c].cutoff_hz if c in DEFAULT_SENSORS else None for c in names}
-    distinct = {fc for fc in cutoff.values() if fc is not None and fc < 0.5 * fs}
+    distinct = {fc for fc in (*cutoff.values(), SMOOTH_HZ) if fc is not None and fc < 0.5 * fs}
     out = {}
     for own in set(cutoff.values()):
         group = [c for c in names if cutoff[c] == own]
-        sos = _lowpass((*sorted(distinct - {own}), SMOOTH_HZ), fs)
         x = np.array([rec.data[c] for c in group])
+        if not distinct - {own}:  # sampled too slowly for any of the filters
+            out |= dict(zip(group, x))
+            continue
+        sos = _lowpass(tuple(sorted(distinct - {own})), fs)
         # start in steady state: the rig's filters had run long before the recording
         y, _ = signal.sosfilt(sos, x, zi=signal.sosfilt_zi(sos)[:, None, :] * x[None, :, :1])
         out |= dict(zip(group, y))

@@ -157,8 +157,8 @@ def _ratios(runs: Sequence[Recording], prior: Params, est: dict[str, Estimate],
         value = float(np.median([out[id(r)] for r in runs]))
         origin = (f"the commanded ratio {', '.join(f'{c:g}' for c in commanded)} (meta.json of the runs)" if commanded
                   else f"the prior ratio {prior.driveline.ratio:g}")
-        notes["driveline.ratio"] = (value, f"not measured, {origin} is used: the CVT input speed exceeds "
-                                           f"{W_RATIO:g} rad/s in too few samples for the speed sensors to give the ratio")
+        notes["driveline.ratio"] = (value, f"not measured, {origin} is used: the CVT input speed exceeds {W_RATIO:g} "
+                                           "rad/s in too few samples for the speed sensors to give the ratio")
     return out
 
 

@@ -99,8 +99,8 @@ class Identification:
         out["parameter_reasons"] = {path: why for path, (_, why) in sources.items()}
         why_not = {PARAMS_FROM[path]: why for path, (status, why) in sources.items() if status == "prior"}
         for key in (*REPORTED, "ratio", "J_p", "J_1", "J_s"):  # always present: "not identified" is no typo
-            out.setdefault(key, {"value": None, "se": None, "note": f"not identified: {why_not.get(key, 'no suitable runs')}",
-                                 "sources": []})
+            why = why_not.get(key, "no suitable runs")
+            out.setdefault(key, {"value": None, "se": None, "note": f"not identified: {why}", "sources": []})
         return out
 
 
@@ -117,7 +117,8 @@ def identified_params(prior: Params, est: dict[str, Estimate], fallback: dict[st
         raise WetclutchError(f"identified values make no valid parameter set: {err}") from None
 
 
-def identified_values(prior: Params, est: dict[str, Estimate], fallback: dict[str, Any] | None = None) -> dict[str, Any]:
+def identified_values(prior: Params, est: dict[str, Estimate],
+                      fallback: dict[str, Any] | None = None) -> dict[str, Any]:
     """Dotted parameter path -> identified value, for the parameters the estimates determine.
 
     ``friction.mu_slip_poly`` (``mu_scale`` 1), ``driveline.ratio``, the inertias

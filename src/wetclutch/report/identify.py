@@ -97,7 +97,8 @@ def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
     lines += ["", "## Identified versus prior parameters", "", "| parameter | prior | identified | from |", "|---|---|---|---|"]
     origin = {p: PARAMS_FROM[p] if status == "identified" else "not identified (see above)"
               for p, (status, _) in sources.items()}
-    lines += [f"| {p} | {_fmt(a)} | {_fmt(b)} | {origin.get(p, '')} |" for p, a, b in _changed(result)] or ["| (none) | | | |"]
+    lines += [f"| {p} | {_fmt(a)} | {_fmt(b)} | {origin.get(p, '')} |"
+              for p, a, b in _changed(result)] or ["| (none) | | | |"]
     lines += ["", "## Validation on held-out files", "",
               "Each file predicted by models identified from the other files (leave one file out).", "",
               "| file | signal | model | NRMSE | VAF [%] |", "|---|---|---|---|---|"]
