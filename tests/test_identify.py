@@ -185,6 +185,15 @@ def test_friction_is_identified_with_the_commanded_ratio_when_the_speeds_cannot_
     assert "commanded ratio 1.25" in (tmp_path / "out" / "report.html").read_text()
 
 
+def test_without_the_secondary_speed_its_inertia_is_the_prior_and_said(slow_cvt_input):
+    _, recs = slow_cvt_input
+    bare = [channels.Recording(r.path, {k: v for k, v in r.data.items() if k != "omega_s"}, r.experiment, r.config,
+                               r.input_mode, r.meta) for r in recs]
+    res = ident.identify(bare)
+    assert "J_s" not in res.estimates and "J_p" in res.estimates
+    assert res.sources()["driveline.J_s"] == ("prior", "no omega_s channel")
+
+
 def test_without_a_commanded_ratio_the_prior_ratio_is_used_and_said(slow_cvt_input, tmp_path):
     root, _ = slow_cvt_input
     for name in CLUTCH_STEPS:  # the files alone, as a rig without meta.json would write them
