@@ -81,6 +81,7 @@ def main() -> None:
     print(f"reading files (MDF 4 and MAT, checks, units)         {read_s / read_n * 3.6e6:8.3f} s per hour of data")
     print(f"found: mu_slip_poly {[f'{c:.4g}' for c in e['mu_slip_poly'].value]}, "
           f"contact pressure {e['contact_pressure_Pa'].value / 1e5:.4f} bar, resonance {e['resonance_Hz'].value:.4f} Hz, "
+          f"J_p {e['J_p'].value:.4f}, J_s {e['J_s'].value:.4f} kg m^2, "
           f"{len(result.onsets)} onsets, {len(result.steps)} step models, {len(result.responses)} frequency responses")
 
 

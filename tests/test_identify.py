@@ -18,10 +18,12 @@ from scipy import signal
 
 from wetclutch import ident, params
 from wetclutch.ident import dynamics
+from wetclutch.ident.friction import measured_ratio
 from wetclutch.ident import recordings as channels
 from wetclutch.errors import WetclutchError
 from wetclutch.physics import actuator
 from wetclutch.plant import clutch, driveline
+from wetclutch.report import identify as identify_report
 from wetclutch.report import rig as rig_report
 from wetclutch.rig import experiments as rig
 from wetclutch.rig.onset import TORQUE_ONSET, first_crossing
@@ -106,6 +108,106 @@ def test_ratio_and_resonance_are_recovered(identified, rig_data):
         assert abs(rg.freq / f_true - 1.0) < 0.02
         assert 0.0 < rg.zeta < 0.2
     assert len(identified.ringings) == 2
+
+
+def test_inertias_of_the_default_driveline_are_recovered(identified):
+    # the rig of the round trip keeps the default inertias; the clutch output's is too small to show
+    assert identified.estimates["J_p"].value == pytest.approx(params.Driveline().J_p, rel=0.02)
+    assert identified.estimates["J_s"].value == pytest.approx(params.Driveline().J_s, rel=0.02)
+    assert "J_1" not in identified.estimates
+    assert identified.identified.driveline.J_1 == identified.prior.driveline.J_1
+    status, why = identified.sources()["driveline.J_1"]
+    assert status == "prior" and why.startswith("not excited by the data")
+
+
+def _rig_runs(root: Path, overrides: dict, runs: dict) -> list[channels.Recording]:
+    """Rig runs of a clutch with ``overrides``, written like a real rig, read back."""
+    p = params.load(overrides=overrides)
+    recs = []
+    for name, kw in runs.items():
+        kw = dict(kw)
+        rig_report.write(rig.run(kw.pop("experiment"), p, **kw), root / name)
+        recs.append(channels.load(root / name / "measured.csv"))
+    return recs
+
+
+CLUTCH_STEPS = {k: RUNS[k] for k in ("step41", "step85")}
+
+
+@pytest.mark.parametrize("overrides, identified_within, kept", [
+    # heavier primary, lighter secondary, a clutch output 5 times the default: too light to be excited
+    ({"driveline.J_p": 1.8, "driveline.J_s": 4.0, "driveline.J_1": 5e-3}, {"J_p": 0.02, "J_s": 0.02}, ["J_1"]),
+    # a clutch output 50 times the default: its acceleration in the slip phase shows
+    ({"driveline.J_1": 5e-2}, {"J_p": 0.02, "J_s": 0.02, "J_1": 0.15}, []),
+])
+def test_inertias_are_identified_where_the_data_excite_them(tmp_path, overrides, identified_within, kept):
+    recs = _rig_runs(tmp_path, overrides, {"step85": RUNS["step85"]})
+    res = ident.identify(recs)
+    true = params.load(overrides=overrides).driveline
+    for name, rel in identified_within.items():
+        est = res.estimates[name]
+        assert est.value == pytest.approx(getattr(true, name), rel=rel), name
+        assert 0 < est.se < 0.1 * est.value
+        assert getattr(res.identified.driveline, name) == est.value
+        assert res.sources()[f"driveline.{name}"][0] == "identified"
+    for name in kept:
+        assert name not in res.estimates
+        assert getattr(res.identified.driveline, name) == getattr(params.Driveline(), name)
+        assert res.sources()[f"driveline.{name}"][1].startswith("not excited by the data")
+        assert res.as_json()["parameters"][f"driveline.{name}"] == "prior"
+    # the ring-out frequency gives the axle stiffness through the identified inertias
+    assert res.identified.driveline.k_a == pytest.approx(true.k_a, rel=0.03)
+
+
+@pytest.fixture(scope="module")
+def slow_cvt_input(tmp_path_factory):
+    """Runs at a CVT ratio of 1.25: the CVT input turns too slowly for the speed sensors to give the ratio."""
+    root = tmp_path_factory.mktemp("ratio125")
+    return root, _rig_runs(root, {**TRUE, "driveline.ratio": 1.25}, CLUTCH_STEPS)
+
+
+def test_friction_is_identified_with_the_commanded_ratio_when_the_speeds_cannot_give_it(slow_cvt_input, tmp_path):
+    _, recs = slow_cvt_input
+    assert all(np.isnan(measured_ratio(r)[0]) for r in recs)
+    res = ident.identify(recs)
+    assert "ratio" not in res.estimates
+    assert res.identified.driveline.ratio == 1.25  # the rig's setting in meta.json, not the prior's 0.5
+    w = np.linspace(20.0, 120.0, 30)
+    true = np.polyval(TRUE["friction.mu_slip_poly"], w)
+    assert np.max(np.abs(np.polyval(res.estimates["mu_slip_poly"].value, w) / true - 1.0)) < 0.03
+    data = res.as_json()
+    assert data["parameters"]["driveline.ratio"] == "prior"
+    assert "commanded ratio 1.25" in data["parameter_reasons"]["driveline.ratio"]
+    assert data["parameters"]["friction.mu_slip_poly"] == "identified"
+    identify_report.write(res, tmp_path / "out")
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert "| driveline.ratio | prior | not measured, the commanded ratio 1.25 (meta.json of the runs) is used" in report
+    assert "commanded ratio 1.25" in (tmp_path / "out" / "report.html").read_text()
+
+
+def test_without_the_secondary_speed_its_inertia_is_the_prior_and_said(slow_cvt_input):
+    _, recs = slow_cvt_input
+    bare = [channels.Recording(r.path, {k: v for k, v in r.data.items() if k != "omega_s"}, r.experiment, r.config,
+                               r.input_mode, r.meta) for r in recs]
+    res = ident.identify(bare)
+    assert "J_s" not in res.estimates and "J_p" in res.estimates
+    assert res.sources()["driveline.J_s"] == ("prior", "no omega_s channel")
+
+
+def test_without_a_commanded_ratio_the_prior_ratio_is_used_and_said(slow_cvt_input, tmp_path):
+    root, _ = slow_cvt_input
+    for name in CLUTCH_STEPS:  # the files alone, as a rig without meta.json would write them
+        shutil.copy(root / name / "measured.csv", tmp_path / f"{name}.csv")
+    recs = [channels.load(tmp_path / f"{name}.csv") for name in CLUTCH_STEPS]
+    prior = params.load(overrides={"driveline.ratio": 1.25})
+    res = ident.identify(recs, prior)
+    assert res.identified.driveline.ratio == 1.25
+    assert "mu_slip_poly" in res.estimates
+    assert "prior ratio 1.25" in res.sources()["driveline.ratio"][1]
+    # with a wrong prior ratio, mu is wrong by that factor: the ratio scales the clutch torque from T_r
+    wrong = ident.identify(recs, params.load(overrides={"driveline.ratio": 1.0}))
+    assert np.polyval(wrong.estimates["mu_slip_poly"].value, 60.0) == pytest.approx(
+        np.polyval(res.estimates["mu_slip_poly"].value, 60.0) * 1.0 / 1.25, rel=0.01)
 
 
 def test_valve_gain_matches_the_true_static_pressures(identified, rig_data):
@@ -418,6 +520,46 @@ def test_the_chain_from_rig_files_to_a_verified_design(rig_data, tmp_path):
     res = json.loads((tmp_path / "verify" / "verify.json").read_text())
     assert res["cases"] == 2 and all(r["metrics"] for r in res["results"])
     assert "--controller-file" in res["results"][0]["replay"]
+
+
+#: a clutch unlike the defaults: friction curve, kiss point and fill volume (the contact travel), ratio, inertias
+ODD = {"friction.mu_slip_poly": [-1.2e-6, 2.2e-4, 3.0e-2], "hydraulics.x_contact": 1.8e-3, "driveline.ratio": 1.25,
+       "driveline.J_p": 1.8, "driveline.J_s": 4.0}
+
+
+def test_the_chain_on_a_clutch_unlike_the_defaults(tmp_path):
+    """``wetclutch rig`` runs of an odd clutch -> identify -> design -> verify on the identified plant."""
+    sets = [a for k, v in ODD.items() for a in ("--set", f"{k}={v}")]
+    files = []
+    for name, level, temp, seed in (("cold", "1.8", "41", "1"), ("warm", "2.5", "85", "2")):
+        r = _cli("rig", "step", "--level", level, "--oil-temp", temp, "--seed", seed, *sets,
+                 "--out", str(tmp_path / name))
+        assert r.returncode == 0, r.stderr
+        files.append(str(tmp_path / name / "measured.mf4"))
+    out = tmp_path / "id"
+    r = _cli("identify", *files, "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    got, true = params.load(out / "params.toml"), params.load(overrides=ODD)
+    assert got.driveline.ratio == pytest.approx(1.25, rel=0.005)  # the heavier primary turns the CVT fast enough
+    assert got.driveline.J_p == pytest.approx(1.8, rel=0.02) and got.driveline.J_s == pytest.approx(4.0, rel=0.02)
+    assert actuator.contact_pressure(got) == pytest.approx(actuator.contact_pressure(true), abs=0.05e5)
+    w = np.linspace(20.0, 120.0, 30)
+    mu_true = np.polyval(ODD["friction.mu_slip_poly"], w)
+    assert np.max(np.abs(np.polyval(got.friction.mu_slip_poly, w) / mu_true - 1)) < 0.03
+    report = (out / "report.md").read_text()
+    assert "| driveline.J_p | identified |" in report and "| driveline.J_1 | prior | not excited by the data" in report
+    des = _cli("design", "--param-file", str(out / "params.toml"), "--out", str(tmp_path / "design"))
+    assert des.returncode == 0, des.stderr
+    row = next(ln for ln in (tmp_path / "design" / "design.md").read_text().splitlines() if ln.startswith("| ratio |"))
+    assert float(row.split("|")[2]) == pytest.approx(1.25, rel=0.005) and "plant (identified)" in row
+    small = tmp_path / "r.toml"
+    small.write_text("[request]\ntarget = 't_ref'\nlow = 60.0\nhigh = 120.0\ncorner = true\n")
+    ver = _cli("verify", "--param-file", str(out / "params.toml"), "--controller-file",
+               str(tmp_path / "design" / "controller.toml"), "--ranges", str(small), "--samples", "0", "--workers", "1",
+               "--quiet", "--out", str(tmp_path / "verify"))
+    assert ver.returncode == 0, ver.stderr
+    res = json.loads((tmp_path / "verify" / "verify.json").read_text())
+    assert res["cases"] == 2 and all(r["metrics"] for r in res["results"])
 
 
 def test_cli_identify_bad_input_is_one_line_and_writes_nothing(rig_data, tmp_path, cli_refuses):

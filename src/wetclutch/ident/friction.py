@@ -6,16 +6,18 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from pydantic import ValidationError
 from scipy.ndimage import maximum_filter1d
 
 from ..errors import WetclutchError
-from ..params import Params
+from ..params import Driveline, Params
 from ..physics import friction as law
 from .estimate import BAR, Estimate, aligned, inflation, robust_std, smooth, source
 from .onset import Onset
 from .recordings import Recording
 
 SLIP_MIN = 10.0  # rad/s: below it the speed sensors' resolution spoils the slip
+W_RATIO = 20.0  # rad/s: CVT input speed above which the speeds give the ratio
 
 
 @dataclass
@@ -35,9 +37,12 @@ class SlipSamples:
 
 
 def measured_ratio(rec: Recording) -> tuple[float, float]:
-    """CVT ratio ``omega_r / omega_1`` (median where ``omega_1`` is well measured) and its standard error."""
+    """CVT ratio ``omega_r / omega_1`` (median where ``omega_1`` exceeds :data:`W_RATIO`) and its standard error.
+
+    Both nan where fewer than 20 samples qualify: then the speeds cannot give the ratio.
+    """
     w1, wr = rec.data["omega_1"], rec.data["omega_r"]
-    ok = w1 > 20.0
+    ok = w1 > W_RATIO
     if np.count_nonzero(ok) < 20:
         return float("nan"), float("nan")
     r = wr[ok] / w1[ok]
@@ -45,10 +50,24 @@ def measured_ratio(rec: Recording) -> tuple[float, float]:
     return m, float(1.2533 * np.std(r) / np.sqrt(r.size) * np.sqrt(inflation(r - m)))
 
 
-def slip_samples(rec: Recording, prior: Params, p_contact: float, on: Onset | None) -> SlipSamples | None:
+def commanded_ratio(rec: Recording) -> float | None:
+    """The CVT ratio the rig was set to, if the recording's ``meta.json`` says it (``params.driveline.ratio``,
+    within the parameter's range)."""
+    given = rec.meta.get("params")
+    driveline = given.get("driveline") if isinstance(given, dict) else None
+    if not isinstance(driveline, dict) or "ratio" not in driveline:
+        return None
+    try:
+        return Driveline(ratio=driveline["ratio"]).ratio
+    except ValidationError:
+        return None
+
+
+def slip_samples(rec: Recording, prior: Params, p_contact: float, on: Onset | None,
+                 ratio: float) -> SlipSamples | None:
     """Friction coefficient samples ``mu = T_c / (F_n knee(F_n))`` of the slip phase.
 
-    ``T_c = T_r i / eta - d_drag slip`` with ``i`` the measured ratio, ``eta`` the
+    ``T_c = T_r i / eta - d_drag slip`` with ``i = ratio`` the run's CVT ratio, ``eta`` the
     prior efficiency (forward power flow: before synchronisation) and ``d_drag``
     the oil drag seen before the onset; ``F_n = (p - p_contact) A_p`` with the
     prior piston area. The model's friction drops at low normal force by the
@@ -59,9 +78,6 @@ def slip_samples(rec: Recording, prior: Params, p_contact: float, on: Onset | No
     pressure or of the CVT input speed, which the sensors' filters smear).
     """
     if rec.config != "clutch":
-        return None
-    ratio, _ = measured_ratio(rec)
-    if not np.isfinite(ratio):
         return None
     d = aligned(rec)
     t, p, T = rec.t, d["p_clutch"], d["T_r"]

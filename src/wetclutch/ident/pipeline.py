@@ -7,8 +7,13 @@ or a small record per run). :func:`identify` runs all estimators that the
 recordings support:
 
 * torque onset after a command step: dead time and contact pressure (:func:`onset`);
+* the CVT ratio from the speeds (:func:`measured_ratio`); where the CVT input turns
+  too slowly for the speed sensors, the ratio the rig was set to (``meta.json``) or
+  the prior's, noted as such;
 * friction versus slip from the slip phase of clutch runs (:func:`friction`), also
   binned by pressure and by oil temperature;
+* the inertias ``J_p``, ``J_1``, ``J_s`` from the torque and speed balances of clutch
+  runs (:func:`inertias`), where the data excite them;
 * static pressure versus command on the plateaus of steps and staircases, with the
   hysteresis between up and down staircases (:func:`static_gain`, :func:`hysteresis`);
 * low-order pressure models fitted to steps and relaxations (:func:`step_models`)
@@ -27,6 +32,7 @@ pressure with an old torque.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -35,7 +41,8 @@ from ..params import Params
 from ..physics import actuator
 from .dynamics import frequency_response, step_models
 from .estimate import Estimate, source, weighted_mean
-from .friction import SLIP_MIN, friction, measured_ratio, slip_samples
+from .friction import SLIP_MIN, W_RATIO, commanded_ratio, friction, measured_ratio, slip_samples
+from .inertia import J_P_HELD, REL_SE_MAX, InertiaFit, excited, inertias
 from .onset import onset
 from .recordings import Recording
 from .result import Identification, identified_params
@@ -53,8 +60,9 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
     recordings
         Checked recordings (:func:`wetclutch.ident.recordings.load`).
     prior
-        Parameters not identified here (piston area, efficiency, friction knee,
-        inertias ...) and the base of the identified parameter set; defaults if None.
+        Parameters not identified here (piston area, efficiency, friction knee ...,
+        and those the recordings do not determine) and the base of the identified
+        parameter set; defaults if None.
     mu_order
         Order of the ``mu(slip)`` polynomial.
     progress
@@ -90,14 +98,15 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
                                                             for o in onsets])
     p_contact = est["contact_pressure_Pa"].value if onsets else actuator.contact_pressure(prior)
     by_rec = {id(o.rec): o for o in onsets}
-    slips = [s for rec in recordings if (s := slip_samples(rec, prior, p_contact, by_rec.get(id(rec)))) is not None]
+    clutch_runs = [r for r in recordings if r.config == "clutch"]
+    notes: dict[str, tuple[Any, str]] = {}  # parameter path -> (value instead of the prior's or None, why)
+    ratio_of = _ratios(clutch_runs, prior, est, notes)
+    slips = [s for rec in clutch_runs
+             if (s := slip_samples(rec, prior, p_contact, by_rec.get(id(rec)), ratio_of[id(rec)])) is not None]
     if slips:
         est["mu_slip_poly"] = friction(slips, mu_order)
-    ratios = [(measured_ratio(r), r) for r in recordings if r.config == "clutch"]
-    ratios = [(v, r) for v, r in ratios if np.isfinite(v[0])]
-    if ratios:
-        m, se = weighted_mean(np.array([v[0] for v, _ in ratios]), np.array([v[1] for v, _ in ratios]))
-        est["ratio"] = Estimate(m, se, "-", [source(r, r.t[0], r.t[-1]) for _, r in ratios])
+    fits = [f for rec in clutch_runs if (f := inertias(rec, prior, ratio_of[id(rec)])) is not None]
+    _inertias(fits, clutch_runs, est, notes)
     drags = [(o, s) for o in onsets for s in slips if s.rec is o.rec and o.slip0 > SLIP_MIN]
     if drags:
         # open-clutch oil drag: T_r before the onset, back through the CVT, per rad/s of slip
@@ -125,8 +134,54 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
     temps = [r.oil_temp_C for r in recordings if r.config == "clutch"] or [r.oil_temp_C for r in recordings]
     est["oil_temp_C"] = Estimate(float(np.median(temps)), float(np.std(temps)), "C (median over the runs)",
                                  [source(r, r.t[0], r.t[-1]) for r in recordings])
-    identified = identified_params(prior, est)
-    result = Identification(list(recordings), prior, est, onsets, slips, points, steps, responses, ringings, [],
-                            identified)
+    identified = identified_params(prior, est, {k: v for k, (v, _) in notes.items()})
+    result = Identification(list(recordings), prior, est, onsets, slips, points, steps, responses, ringings, fits, [],
+                            identified, {k: why for k, (_, why) in notes.items()})
     result.validation = validate(result)
     return result
+
+
+def _ratios(runs: Sequence[Recording], prior: Params, est: dict[str, Estimate],
+            notes: dict[str, tuple[Any, str]]) -> dict[int, float]:
+    """The CVT ratio of each clutch run: measured where the speeds give it, else the measured ratio of the
+    other runs, else the commanded one (``meta.json``) or the prior's, noted in ``notes``."""
+    measured = {id(r): measured_ratio(r) for r in runs}
+    good = [(v, r) for r in runs if np.isfinite((v := measured[id(r)])[0])]
+    if good:
+        m, se = weighted_mean(np.array([v[0] for v, _ in good]), np.array([v[1] for v, _ in good]))
+        est["ratio"] = Estimate(m, se, "-", [source(r, r.t[0], r.t[-1]) for _, r in good])
+        return {id(r): measured[id(r)][0] if np.isfinite(measured[id(r)][0]) else m for r in runs}
+    out = {id(r): commanded_ratio(r) or prior.driveline.ratio for r in runs}
+    if runs:
+        commanded = sorted({c for r in runs if (c := commanded_ratio(r)) is not None})
+        value = float(np.median([out[id(r)] for r in runs]))
+        origin = (f"the commanded ratio {', '.join(f'{c:g}' for c in commanded)} (meta.json of the runs)" if commanded
+                  else f"the prior ratio {prior.driveline.ratio:g}")
+        notes["driveline.ratio"] = (value, f"not measured, {origin} is used: the CVT input speed exceeds {W_RATIO:g} "
+                                           "rad/s in too few samples for the speed sensors to give the ratio")
+    return out
+
+
+def _inertias(fits: Sequence[InertiaFit], runs: Sequence[Recording], est: dict[str, Estimate],
+              notes: dict[str, tuple[Any, str]]) -> None:
+    """Combine the runs' inertias into estimates where the data excite them; else note why the prior stays."""
+    def combined(name: str) -> tuple[float, float, list[InertiaFit]]:
+        have = [f for f in fits if name in f.values]
+        if not have:
+            return float("nan"), float("nan"), have
+        return (*weighted_mean(np.array([f.values[name][0] for f in have]),
+                               np.array([f.values[name][1] for f in have])), have)
+
+    j1_excited = excited(*combined("J_1")[:2])
+    for name, key in (("J_1", "J_1"), ("J_p", "J_p" if j1_excited else J_P_HELD), ("J_s", "J_s")):
+        path = f"driveline.{name}"
+        m, se, have = combined(key)
+        if not have:
+            why = ("no clutch runs" if not runs else "no omega_s channel" if name == "J_s" and not any(
+                "omega_s" in r.data for r in runs) else "no stretch of the clutch runs with every speed measured")
+            notes[path] = (None, why)
+        elif excited(m, se):
+            est[name] = Estimate(m, se, "kg m^2", [source(f.rec, f.t0, f.t1) for f in have])
+        else:
+            notes[path] = (None, f"not excited by the data: {m:.3g} ± {se:.2g} kg m^2 "
+                                 f"(standard error above {REL_SE_MAX:.0%} of the value)")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -13,6 +13,7 @@ from ..plant.driveline import axle_for
 from .dynamics import FrequencyResponse, StepModel
 from .estimate import Estimate, source
 from .friction import SlipSamples
+from .inertia import InertiaFit
 from .onset import Onset
 from .recordings import Recording
 from .ringing import Ringing
@@ -21,6 +22,29 @@ from .static import Plateau
 #: entries of ``identified.json`` that are always written (null when the files do not support them)
 REPORTED = ("mu_slip_poly", "contact_pressure_Pa", "valve_gain", "clutch_gain_poly_bar_per_V", "resonance_Hz",
             "damping_ratio")
+
+#: parameters that identification determines when the runs allow: dotted path -> identified.json entry it comes from
+PARAMS_FROM = {
+    "friction.mu_slip_poly": "mu_slip_poly",
+    "friction.mu_scale": "mu_slip_poly",
+    "friction.mu_slope": "mu_slip_poly",
+    "driveline.ratio": "ratio",
+    "driveline.J_p": "J_p",
+    "driveline.J_1": "J_1",
+    "driveline.J_s": "J_s",
+    "driveline.k_a": "resonance_Hz",
+    "driveline.d_a": "damping_ratio",
+    "hydraulics.x_contact": "contact_pressure_Pa",
+    "rig.oil_temp_C": "oil_temp_C",
+}
+#: the runs each entry of :data:`PARAMS_FROM` needs, for the reason a parameter stays at the prior
+_NEEDS = {
+    "mu_slip_poly": "a slip phase of a clutch run with enough calm samples",
+    "ratio": "a clutch run",
+    "resonance_Hz": "a ring-out of at least 0.8 s after synchronisation",
+    "damping_ratio": "a ring-out of at least 0.8 s after synchronisation",
+    "contact_pressure_Pa": "a torque onset after a rising command step of a clutch run",
+}
 
 
 @dataclass
@@ -36,8 +60,22 @@ class Identification:
     steps: list[StepModel]
     responses: list[FrequencyResponse]
     ringings: list[Ringing]
+    inertias: list[InertiaFit]
     validation: list[dict[str, Any]]
     identified: Params
+    #: dotted parameter path -> why it comes from the prior (or the commanded value) instead of the runs
+    notes: dict[str, str] = field(default_factory=dict)
+
+    def sources(self) -> dict[str, tuple[str, str]]:
+        """Parameter path -> (``identified`` or ``prior``, reason), for the parameters of :data:`PARAMS_FROM`."""
+        found = identified_values(self.prior, self.estimates)
+        out = {}
+        for path, entry in PARAMS_FROM.items():
+            if path in found:
+                out[path] = ("identified", f"from {entry}")
+            else:
+                out[path] = ("prior", self.notes.get(path) or f"no suitable runs (needs {_NEEDS[entry]})")
+        return out
 
     def as_json(self) -> dict[str, Any]:
         """The content of ``identified.json``: flat, named entries, each with value, se and sources."""
@@ -57,35 +95,50 @@ class Identification:
         found = identified_values(self.prior, e)
         out["parameters"] = {path: "identified" if path in found else "prior"
                              for path, *_ in describe(self.identified)}
-        for key in REPORTED:  # always present, so that a reader can tell "not identified" from a typo
-            out.setdefault(key, {"value": None, "se": None, "note": "not identified: no suitable runs", "sources": []})
+        sources = self.sources()
+        out["parameter_reasons"] = {path: why for path, (_, why) in sources.items()}
+        why_not = {PARAMS_FROM[path]: why for path, (status, why) in sources.items() if status == "prior"}
+        for key in (*REPORTED, "ratio", "J_p", "J_1", "J_s"):  # always present: "not identified" is no typo
+            why = why_not.get(key, "no suitable runs")
+            out.setdefault(key, {"value": None, "se": None, "note": f"not identified: {why}", "sources": []})
         return out
 
 
-def identified_params(prior: Params, est: dict[str, Estimate]) -> Params:
-    """The prior parameters with the identified values put in (:func:`identified_values`)."""
+def identified_params(prior: Params, est: dict[str, Estimate], fallback: dict[str, Any] | None = None) -> Params:
+    """The prior parameters with the identified values put in (:func:`identified_values`).
+
+    ``fallback`` gives values (not None) that replace the prior's where the runs do not
+    identify them, e.g. the commanded CVT ratio.
+    """
+    fallback = {k: v for k, v in (fallback or {}).items() if v is not None}
     try:
-        return load(None, identified_values(prior, est), base=prior)
+        return load(None, fallback | identified_values(prior, est, fallback), base=prior)
     except WetclutchError as err:
         raise WetclutchError(f"identified values make no valid parameter set: {err}") from None
 
 
-def identified_values(prior: Params, est: dict[str, Estimate]) -> dict[str, Any]:
+def identified_values(prior: Params, est: dict[str, Estimate],
+                      fallback: dict[str, Any] | None = None) -> dict[str, Any]:
     """Dotted parameter path -> identified value, for the parameters the estimates determine.
 
-    ``friction.mu_slip_poly`` (``mu_scale`` 1), ``driveline.ratio``, ``rig.oil_temp_C``,
-    ``hydraulics.x_contact`` (from the contact pressure, keeping the prior prestress,
-    spring and piston area), ``driveline.k_a`` and ``d_a`` (from resonance and damping
-    with the prior inertias, the relation in :mod:`wetclutch.params`).
+    ``friction.mu_slip_poly`` (``mu_scale`` 1), ``driveline.ratio``, the inertias
+    ``driveline.J_p``, ``J_1``, ``J_s``, ``rig.oil_temp_C``, ``hydraulics.x_contact``
+    (from the contact pressure, keeping the prior prestress, spring and piston area),
+    ``driveline.k_a`` and ``d_a`` (from resonance and damping with the ratio and the
+    inertias, identified or else from ``fallback`` or the prior, through the relation
+    in :mod:`wetclutch.params`).
     """
+    fallback = fallback or {}
     sets: dict[str, Any] = {}
     if "mu_slip_poly" in est:
         sets["friction.mu_slip_poly"] = list(est["mu_slip_poly"].value)
         sets["friction.mu_scale"] = 1.0
         sets["friction.mu_slope"] = 1.0
-    ratio = est["ratio"].value if "ratio" in est else prior.driveline.ratio
+    ratio = est["ratio"].value if "ratio" in est else fallback.get("driveline.ratio") or prior.driveline.ratio
     if "ratio" in est:
         sets["driveline.ratio"] = ratio
+    inertias = {name: float(est[name].value) for name in ("J_p", "J_1", "J_s") if name in est}
+    sets |= {f"driveline.{name}": v for name, v in inertias.items()}
     if "oil_temp_C" in est:
         sets["rig.oil_temp_C"] = float(np.clip(est["oil_temp_C"].value, *OIL_TEMP_RANGE_C))
     h = prior.hydraulics
@@ -93,7 +146,8 @@ def identified_values(prior: Params, est: dict[str, Estimate]) -> dict[str, Any]
         sets["hydraulics.x_contact"] = (est["contact_pressure_Pa"].value - h.p_prestress) * h.A_p / h.k_reset
     if "resonance_Hz" in est:
         zeta = est["damping_ratio"].value if "damping_ratio" in est else None
-        k_a, d_a = axle_for(prior, ratio, est["resonance_Hz"].value, zeta)
+        plant = prior.model_copy(update={"driveline": prior.driveline.model_copy(update=inertias)})
+        k_a, d_a = axle_for(plant, ratio, est["resonance_Hz"].value, zeta)
         sets["driveline.k_a"] = k_a
         if d_a is not None:
             sets["driveline.d_a"] = d_a

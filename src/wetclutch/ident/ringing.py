@@ -54,7 +54,8 @@ def resonance(rec: Recording, slip_tol: float = 2.0, min_window: float = 0.8) ->
         return None
     def model(x: np.ndarray) -> np.ndarray:
         c0, c1, a, s, om, ph = x
-        return c0 + c1 * tau + a * np.exp(-s * tau) * np.cos(om * tau + ph)
+        with np.errstate(over="ignore", invalid="ignore"):  # the solver's trial steps may grow the envelope
+            return c0 + c1 * tau + a * np.exp(-s * tau) * np.cos(om * tau + ph)
 
     # start values: for a fixed decay and frequency the model is linear in offset, trend, a cos(ph), a sin(ph)
     s0, om0 = 0.5, 2 * np.pi * f0

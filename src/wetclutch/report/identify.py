@@ -13,22 +13,10 @@ import numpy as np
 from .. import params as params_mod
 from ..ident.dynamics import MODEL_NAMES
 from ..ident.estimate import BAR
-from ..ident.result import Identification
+from ..ident.result import PARAMS_FROM, Identification
 from ..output import atomic_dir, write_json
 from . import html
 from .plots import plt
-
-#: identified parameters shown against the prior: dotted path -> identified.json entry it comes from
-PARAMS_FROM = {
-    "friction.mu_slip_poly": "mu_slip_poly",
-    "friction.mu_scale": "mu_slip_poly",
-    "driveline.ratio": "ratio",
-    "driveline.k_a": "resonance_Hz",
-    "driveline.d_a": "damping_ratio",
-    "hydraulics.x_contact": "contact_pressure_Pa",
-    "rig.oil_temp_C": "oil_temp_C",
-}
-
 
 def write(result: Identification, out: str | Path) -> None:
     """Write ``identified.json``, ``params.toml``, ``report.md`` and the plots into ``out`` (replaced whole)."""
@@ -99,8 +87,18 @@ def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
             mp = r.model_params
             lines.append(f"| {r.rec.path} | {r.freq[0]:.2f}..{r.freq[-1]:.2f} | {mp['gain_bar_per_unit']:.4g} | "
                          f"{mp['dead_time_s']:.4f} | {mp['omega_n_rad_s']:.4g} | {mp['zeta']:.3g} |")
+    lines += ["", "## Parameters: identified or from the prior", "",
+              "The parameters that identification determines when the runs allow it; every other parameter "
+              "(valve, hydraulics but the contact travel, thermal, ...) comes from the prior parameters, "
+              "which these experiments do not determine.", "",
+              "| parameter | source | reason |", "|---|---|---|"]
+    sources = result.sources()
+    lines += [f"| {p} | {status} | {why} |" for p, (status, why) in sources.items()]
     lines += ["", "## Identified versus prior parameters", "", "| parameter | prior | identified | from |", "|---|---|---|---|"]
-    lines += [f"| {p} | {_fmt(a)} | {_fmt(b)} | {PARAMS_FROM.get(p, '')} |" for p, a, b in _changed(result)] or ["| (none) | | | |"]
+    origin = {p: PARAMS_FROM[p] if status == "identified" else "not identified (see above)"
+              for p, (status, _) in sources.items()}
+    lines += [f"| {p} | {_fmt(a)} | {_fmt(b)} | {origin.get(p, '')} |"
+              for p, a, b in _changed(result)] or ["| (none) | | | |"]
     lines += ["", "## Validation on held-out files", "",
               "Each file predicted by models identified from the other files (leave one file out).", "",
               "| file | signal | model | NRMSE | VAF [%] |", "|---|---|---|---|---|"]
