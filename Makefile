@@ -26,6 +26,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_actuator.py
 	$(BIN)/python benchmarks/bench_launch.py
 	$(BIN)/python benchmarks/bench_identify.py
+	$(BIN)/python benchmarks/bench_compile.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

@@ -101,8 +101,8 @@ def test_launch_writes_signals_summary_plot(tmp_path):
     out = tmp_path / "launch"
     assert main(["launch", "--out", str(out), "--t-ref", "120", "--oil-temp", "60", "--seed", "2"]) == 0
     sig = pd.read_csv(out / "signals.csv")
-    assert list(sig.columns) == ["time", "p_clutch", "T_r", "omega_p", "omega_1", "omega_r", "omega_s", "oil_temp",
-                                 "t_ref", "u"]
+    assert list(sig.columns) == ["time", "p_clutch", "T_r", "omega_p", "omega_1", "omega_r", "omega_s", "cvt_ratio",
+                                 "oil_temp", "t_ref", "u"]
     s = json.loads((out / "summary.json").read_text())
     for key in ("steady_state_error_pct", "t95_s", "t95_settled_s", "overshoot_pct", "ripple_pct", "creep_Nm",
                 "jerk_max", "slip_energy_J", "t_sync_s"):

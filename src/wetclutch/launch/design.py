@@ -60,8 +60,9 @@ LAUNCH_DEFAULTS = {
     "dither_amp_torque": 0.3, "dither_hz_torque": 125.0, "ff_shift_torque": 1.0, "dip": 0.5, "dip_time": 0.015,
 }
 #: the defaults that came from ``wetclutch tune`` on the default rig (CMA-ES, 40 training plants of the shipped
-#: ranges, seed 0, 6 generations of 8), rounded; the rest were set by hand on the default rig
-TUNED = ("kp_p", "ki_p", "ki_t", "tau_ref", "theta0")
+#: ranges, seed 0, 6 generations of 8), rounded; ``tau_theta`` from the launch loop's margins
+#: (:mod:`wetclutch.launch.margins`) and a sweep, ``kd_p`` from a sweep; the rest were set by hand on the default rig
+TUNED = ("kp_p", "ki_p", "ki_t", "tau_ref")
 #: the baseline's settings that are not derived from the plant
 BASELINE_DEFAULTS = {"hold_offset": 0.05e5, "dip": 0.5, "dip_time": 0.015, "dither_amp_torque": 0.3,
                      "dither_hz_torque": 125.0}
