@@ -91,7 +91,7 @@ def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, ho
         out_u[k] = u
         ext[u_slot] = u
         if hold.shape[0] > 0:
-            ext[u_slot + 1] = ratio_hold.step(hold, hs, meas, t_ref[k], cs[control.CS_PHASE] == control.LOCKUP)
+            ext[u_slot + 1] = ratio_hold.step(hold, hs, meas, t_ref[k], cs[control.CS_PHASE] >= control.TORQUE)
         ws.istate[IS_SETTLE] = 1
         status = advance(net, ext, ws, (k + 1) * dt, dt, 0.0, 1e-6, 1e-9, np.inf, out_t, out_x, out_aux, out_mode)
         if status != OK:

@@ -5,7 +5,8 @@ its own accord: the primary flywheel and the vehicle are then one rigid system t
 the CVT, and the axle torque rings down to what the road load takes. Moving the ratio
 ``i = w_r / w_1`` makes the CVT output turn faster than the vehicle, winding up the axle:
 the kinetic energy of the primary flows on into the vehicle at the requested torque
-until a stated limit: the ratio's greatest value, or the hold's time limit.
+until a stated limit: the ratio's greatest value, the hold's time limit, or the CVT's rate
+limit no longer keeping up (the torque more than :data:`BAND` low at the full rate).
 
 Physics of the hold. With the clutch locked, ``J_a w_p' = -i T_r / eta`` (``J_a`` the
 primary side's inertia, power flowing forward) and the axle winds up at ``T_r' ~ k_a v``,
@@ -16,7 +17,10 @@ primary side's inertia, power flowing forward) and the axle winds up at ``T_r' ~
 The controller gives ``u = i' w_p`` as that feedforward (with ``a_s`` as the secondary
 flywheel accelerated just before the hold, when the axle torque was at the request) plus
 a PID-like feedback ``K_T e - K_v v + K_I int(e)`` on the torque error ``e = T_ref - T_r``
-and the measured speed across the axle; with ``e' = -k_a v`` the loop's characteristic
+and the speed across the axle as the locked driveline has it, ``v = i w_p - w_s`` from the
+measured speeds. The hold starts in the clutch's last slip (:data:`HOLD_SLIP`): ``v`` then
+counts that slip, and the ratio falling to ``w_s / w_p`` closes it, so that the lock does not
+make ``w_1`` jump and wind up the axle. With ``e' = -k_a v`` the loop's characteristic
 polynomial is ``s^3 + K_v s^2 + k_a K_T s + k_a K_I``, placed at a triple pole
 :data:`POLE`. The ratio rate ``u / w_p`` is held within the CVT's rate limit and its
 ratio within its limits (the controller integrates its own command, which the CVT
@@ -43,7 +47,7 @@ from numba import njit
 
 from ..params import Params
 from ..errors import WetclutchError
-from .controller import M_TR, M_WP, M_WR, M_WS
+from .controller import M_TR, M_W1, M_WP, M_WS
 
 _jit = njit(cache=True, error_model="numpy", _nrt=False)
 
@@ -55,6 +59,13 @@ POLE = 10.0
 TAU_W, TAU_ACC = 0.05, 0.1
 #: below this primary speed (rad/s) the hold stops: the ratio rate it needs has no bound
 W_MIN = 1.0
+#: measured clutch slip (rad/s) below which the hold starts, once torque is requested: the clutch's last slip is
+#: closed by the ratio too (the ratio falls to w_s / w_p), so that no jump of w_1 at lock winds up the axle
+HOLD_SLIP = 4.0
+#: the hold ends once the ratio has run at its rate limit for this many samples with the axle torque more than
+#: BAND below the request: the flywheel has slowed past what the CVT can follow
+SAT_N = 20
+BAND = 0.1
 #: time limit of the hold by default, s
 HOLD_TIME = 3.0
 
@@ -62,11 +73,11 @@ HOLD_TIME = 3.0
 DT, J_A, ETA, K_A, R_MIN, R_MAX, RATE, T_LIMIT, KV, KT, KI = range(11)
 N_REC = 11
 # --- state
-(HS_ON, HS_DONE, HS_T, HS_RATIO, HS_Z, HS_ACC, HS_WS, HS_N, HS_REASON, HS_START) = range(10)
-N_HS = 10
+(HS_ON, HS_DONE, HS_T, HS_RATIO, HS_Z, HS_ACC, HS_WS, HS_N, HS_REASON, HS_START, HS_SAT) = range(11)
+N_HS = 11
 #: why the hold ended (HS_REASON)
-RUNNING, RATIO_LIMIT, TIME_LIMIT, NO_SPEED = range(4)
-REASONS = ("running", "ratio limit", "time limit", "primary at rest")
+RUNNING, RATIO_LIMIT, TIME_LIMIT, NO_SPEED, RATE_LIMIT = range(5)
+REASONS = ("running", "ratio limit", "time limit", "primary at rest", "rate limit")
 
 
 def pack(params: Params, dt: float, t_limit: float = HOLD_TIME) -> np.ndarray:
@@ -96,9 +107,9 @@ def initial_state(params: Params) -> np.ndarray:
 
 
 @_jit
-def step(rec, hs, meas, t_ref, locked):
+def step(rec, hs, meas, t_ref, engaged):
     """One sample: the commanded ratio rate (1/s) from the measured channels ``meas``, the request ``t_ref``
-    (N m) and whether the launch controller has closed the clutch (``locked``)."""
+    (N m) and whether the launch controller is past its fill and hold (``engaged``)."""
     dt = rec[DT]
     # the secondary's acceleration, low-passed: before the hold the axle carries the request
     if hs[HS_N] == 0.0:
@@ -107,9 +118,11 @@ def step(rec, hs, meas, t_ref, locked):
     hs[HS_ACC] += ((w_s - hs[HS_WS]) / dt - hs[HS_ACC]) * dt / (TAU_ACC + dt)
     hs[HS_WS] = w_s
     hs[HS_N] += 1.0
-    if hs[HS_DONE] != 0.0 or not (locked and t_ref > 0.0):
+    if hs[HS_DONE] != 0.0 or not (engaged and t_ref > 0.0):
         return 0.0
     if hs[HS_ON] == 0.0:
+        if not (abs(meas[M_WP] - meas[M_W1]) < HOLD_SLIP and meas[M_W1] > 0.0):
+            return 0.0
         hs[HS_ON] = 1.0
         hs[HS_Z] = hs[HS_ACC]
         hs[HS_START] = (hs[HS_N] - 1.0) * dt
@@ -122,17 +135,22 @@ def step(rec, hs, meas, t_ref, locked):
         reason = RATIO_LIMIT
     elif w_p < W_MIN:
         reason = NO_SPEED
+    elif hs[HS_SAT] >= SAT_N:
+        reason = RATE_LIMIT
     if reason != RUNNING:
         hs[HS_DONE] = 1.0
         hs[HS_REASON] = reason
         return 0.0
     hs[HS_T] += dt
     e = t_ref - meas[M_TR]
-    v = meas[M_WR] - meas[M_WS]
+    # the speed across the axle as the locked driveline has it (w_r = i w_p): before the lock it already counts
+    # the clutch's last slip, which the ratio then closes
+    v = i * w_p - meas[M_WS]
     u = i * i * t_ref / (rec[ETA] * rec[J_A]) + hs[HS_Z] + rec[KT] * e - rec[KV] * v
     rate = u / w_p
     lo = max(-rec[RATE], (rec[R_MIN] - i) / dt)
     hi = min(rec[RATE], (rec[R_MAX] - i) / dt)
+    hs[HS_SAT] = hs[HS_SAT] + 1.0 if (rate > rec[RATE] and e > BAND * t_ref) else 0.0
     if rate > hi:
         rate = hi
         if e < 0.0:
@@ -148,7 +166,7 @@ def step(rec, hs, meas, t_ref, locked):
 
 
 def summary(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, ratio: np.ndarray, t_sync: float | None,
-            hs: np.ndarray, band: float = 0.1) -> dict[str, Any]:
+            hs: np.ndarray, band: float = BAND) -> dict[str, Any]:
     """Figures of the hold from the true axle torque ``T_r`` (N m), the request and the CVT's ratio on times ``t``.
 
     ``hold_s`` is how long the controller held (from ``hold_start_s``, until its limit, ``hold_end``);

@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from .compiled import jit, jit_inline
-from .rhs import LIM_MAX, LIM_MIN, capacity, hold_margins, poly, ratio, rhs, slip
-from .workspace import FREE, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets
+from .rhs import LIM_MAX, LIM_MIN, capacity, hold_margins, poly, rate_command, ratio, rhs, slip
+from .workspace import FREE, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets, fs_ratio
 
 
 @jit_inline
@@ -110,6 +110,25 @@ def _project(x, net, clm, grm):
             x[i] = min(max(x[i], net.gr_lim[k, LIM_MIN]), net.gr_lim[k, LIM_MAX])
             if abs(grm[k]) != STUCK:
                 _onto_ratio(x, net, k, x[i])
+
+
+@jit_inline
+def _hold_ratios(t, x, net, ext, fstate):
+    """A moving ratio at a limit with its command pushing beyond is held there (a mode that lasts until the
+    command turns back, an event); the others move."""
+    ng = net.gr_in.shape[0]
+    o = fs_ratio(net.cl_a.shape[0]) + ng
+    for k in range(ng):
+        i = net.gr_state[k]
+        if i < 0:
+            continue
+        rate = rate_command(t, False, net, ext, k)
+        if rate < 0.0 and x[i] <= net.gr_lim[k, LIM_MIN]:
+            fstate[o + k] = -1.0
+        elif rate > 0.0 and x[i] >= net.gr_lim[k, LIM_MAX]:
+            fstate[o + k] = 1.0
+        else:
+            fstate[o + k] = 0.0
 
 
 @jit_inline
@@ -224,6 +243,7 @@ def settle(t, net, ext, ws):
     redundant = False
     for _ in range(4 * (nc + ng) + 4):
         _project(x, net, clm, grm)
+        _hold_ratios(t, x, net, ext, ws.fstate)
         if not rhs(t, False, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm)):
             forget(ws.fact)
             return False

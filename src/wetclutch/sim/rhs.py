@@ -10,8 +10,8 @@ Sign conventions (as in Modelica ``Mechanics.Rotational``): every element joins 
   ``out``, and ``-ratio * c * lam`` on ``in`` with ``c = 1/eta`` when power flows in -> out
   (``lam * w_out > 0``) and ``c = eta`` when it flows back, so losses never create power.
   A moving ratio (a CVT shifting) is a state ``r`` with ``r' = rate(t)``, the commanded
-  rate held within the gear's rate limit, and held at a ratio limit while the command
-  pushes beyond it. Its constraint differentiates to ``a_out - r a_in = r' w_in``: the
+  rate held within the gear's rate limit; reaching a ratio limit is an event, after which
+  it is held there (a mode) until the command turns back. Its constraint differentiates to ``a_out - r a_in = r' w_in``: the
   row gets that velocity term. The ideal gear still does no work of its own (power in
   equals power out for ``eta = 1``, whatever ``r'``), so the energy account is unchanged.
 * spring-damper: deflection ``phi' = w_a - w_b``; torque ``k phi + d (w_a - w_b)`` on
@@ -77,20 +77,27 @@ def ratio(x, net, g):
 
 
 @jit_inline
-def _ratio_rates(t, left, x, net, ext, dx):
-    """The moving ratios' rates into ``dx``: the command within the rate limit, none beyond a ratio limit.
-    True if the network has a moving ratio."""
+def rate_command(t, left, net, ext, g):
+    """Gear ``g``'s commanded ratio rate within its rate limit, 1/s."""
+    lim = net.gr_lim[g, LIM_RATE]
+    return min(max(signals.value(net.gr_rate_sig[g], t, left, net.sig, net.tab, ext), -lim), lim)
+
+
+@jit_inline
+def _ratio_rates(t, left, net, ext, dx, fstate):
+    """The moving ratios' rates into ``dx``: the command within the rate limit, none while held at a limit
+    (their commands into ``fstate`` for the event functions). True if the network has a moving ratio."""
     moving = False
-    for g in range(net.gr_in.shape[0]):
+    ng = net.gr_in.shape[0]
+    o = fs_ratio(net.cl_a.shape[0]) + ng
+    for g in range(ng):
         k = net.gr_state[g]
         if k < 0:
             continue
         moving = True
-        lim = net.gr_lim[g, LIM_RATE]
-        rate = min(max(signals.value(net.gr_rate_sig[g], t, left, net.sig, net.tab, ext), -lim), lim)
-        if (rate > 0.0 and x[k] >= net.gr_lim[g, LIM_MAX]) or (rate < 0.0 and x[k] <= net.gr_lim[g, LIM_MIN]):
-            rate = 0.0
-        dx[k] = rate
+        rate = rate_command(t, left, net, ext, g)
+        fstate[o + ng + g] = rate
+        dx[k] = 0.0 if fstate[o + g] != 0.0 else rate
     return moving
 
 
@@ -438,7 +445,7 @@ def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
     for g in range(ng):
         if abs(grm[g]) == STUCK:
             n += 1
-    moving = _ratio_rates(t, left, x, net, ext, dx)
+    moving = _ratio_rates(t, left, net, ext, dx, ws.fstate)
     if refactor or (moving and _ratios_moved(x, net, ws.fstate)):
         if not _factor_constraints(net, x, clm, grm, ws.A, ws.piv, ws.sol, ws.G, n, ws.istate, ws.fstate):
             return False
@@ -473,7 +480,7 @@ def hold_margins(aux, x, net, grm, k):
 
 
 @jit_inline
-def events(x, aux, net, clm, grm, g):
+def events(x, aux, net, clm, grm, g, fstate):
     """Event functions into ``g``: each is >= 0 while the current modes are valid."""
     nc = net.cl_a.shape[0]
     for j in range(nc):
@@ -505,8 +512,13 @@ def events(x, aux, net, clm, grm, g):
             g[2 * nc + 2 * k] = grm[k] * lam * x[net.gr_out[k]]
             g[2 * nc + 2 * k + 1] = 1.0
     if g.shape[0] > 2 * nc + 2 * ng:
-        # moving ratios: each stays within its limits (held at one, it sits at zero)
+        # moving ratios: each stays within its limits; held at one, its command keeps pushing beyond
+        o = fs_ratio(nc) + ng
         for k in range(ng):
             i = net.gr_state[k]
-            g[2 * nc + 2 * ng + k] = 1.0 if i < 0 else min(x[i] - net.gr_lim[k, LIM_MIN],
-                                                         net.gr_lim[k, LIM_MAX] - x[i])
+            if i < 0:
+                g[2 * nc + 2 * ng + k] = 1.0
+            elif fstate[o + k] != 0.0:
+                g[2 * nc + 2 * ng + k] = fstate[o + k] * fstate[o + ng + k]
+            else:
+                g[2 * nc + 2 * ng + k] = min(x[i] - net.gr_lim[k, LIM_MIN], net.gr_lim[k, LIM_MAX] - x[i])

@@ -42,7 +42,7 @@ FS_PWM_START = 4  # start of the current PWM period
 FS_PWM_H = 5  # + level (0 or 1): the first step after the last edge to that level (0: none yet)
 FS_LOCKS = 7  # + 2 j + LOCK_FIRST / LOCK_LAST: first and last time clutch j locked (-1: never)
 LOCK_FIRST, LOCK_LAST = 0, 1
-N_FSTATE = FS_LOCKS  # without the lock times, which follow, two per clutch, and the factored ratios (fs_ratio)
+N_FSTATE = FS_LOCKS  # without the lock times, which follow, two per clutch, and the gears' slots (fs_ratio)
 
 # istate: the integer part
 IS_SETTLE = 0  # modes must be re-decided before the next step
@@ -69,7 +69,10 @@ def aux_offsets(nc, ng, ns):
 
 @jit_inline
 def fs_ratio(nc):
-    """Start of the ratios (one per gear) that the constraint factors were made with, in ``fstate``."""
+    """Start of the gears' slots in ``fstate``, ``ng`` each, after the lock times: the ratios the constraint
+    factors were made with (+ g), whether a moving ratio is held at its least (-1) or greatest (+1) value
+    while its command pushes beyond (+ ng + g: a mode, decided at restarts), and the latest commanded rate
+    (+ 2 ng + g, for its event function)."""
     return FS_LOCKS + 2 * nc
 
 
@@ -92,7 +95,7 @@ class Workspace(NamedTuple):
     x: np.ndarray  # current state
     clm: np.ndarray  # clutch modes
     grm: np.ndarray  # gear modes (+1 forward, -1 backward, +-STUCK held at standstill)
-    fstate: np.ndarray  # (N_FSTATE + 2 nc + ng,) see FS_* and fs_ratio
+    fstate: np.ndarray  # (N_FSTATE + 2 nc + 3 ng,) see FS_* and fs_ratio
     istate: np.ndarray  # (N_ISTATE,) see IS_*
     K: np.ndarray  # (7, nx) stages
     dx: np.ndarray
@@ -129,11 +132,11 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
     naux = aux_size(nc, ng, ns)
     # a moving ratio adds an event function (its limits) and a velocity-term column per gear
     n_mov = ng if moving_gears(net) else 0
-    fstate = np.zeros(N_FSTATE + 2 * nc + ng)
+    fstate = np.zeros(N_FSTATE + 2 * nc + 3 * ng)
     fstate[FS_T], fstate[FS_H], fstate[FS_LOG_ERR] = t0, h0, np.log(1e-4)
     fstate[FS_PWM_NEXT], fstate[FS_PWM_START] = -np.inf, t0
     fstate[FS_LOCKS:FS_LOCKS + 2 * nc] = -1.0
-    fstate[FS_LOCKS + 2 * nc:] = np.nan  # no factors made yet
+    fstate[FS_LOCKS + 2 * nc:FS_LOCKS + 2 * nc + ng] = np.nan  # no factors made yet
     istate = np.zeros(N_ISTATE, dtype=np.int64)
     istate[IS_SETTLE], istate[IS_LAST_EVENT], istate[IS_BAD_BODY] = 1, -1, -1
     return Workspace(
