@@ -49,7 +49,7 @@ def test_ratio_limit_is_met_at_the_exact_instant():
     ratio = tr.ratio("cvt")
     assert np.all(ratio[: i[0] + 1] == 1.0)
     np.testing.assert_allclose(ratio[i[0]:i[1]], 1.0 - 0.5 * (tr.t[i[0]:i[1]] - 1.0), atol=1e-12)
-    assert np.all(ratio[i[1]:] == 0.6)
+    np.testing.assert_allclose(ratio[i[1]:], 0.6, rtol=0, atol=1e-12)
     w = tr.speed("in")
     assert np.ptp(w[i[1]:]) < 1e-9 * w[-1]
 
@@ -140,7 +140,7 @@ def test_a_large_request_cannot_be_held_a_second_the_flywheel_lacks_the_energy()
     need = 100.0 * tru["omega_s"].iloc[i] * 1.0 / d.eta
     assert e_primary < need
     assert s["held_in_band_s"] < 1.0
-    assert s["hold_end"] in ("ratio limit", "time limit")
+    assert s["hold_end"] == "rate limit"  # the CVT could not shift fast enough for the slowing flywheel
 
 
 def test_launch_post_sync_hold_cli(tmp_path):

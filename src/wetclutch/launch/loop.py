@@ -88,10 +88,11 @@ def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, ho
             meas[c] = reading(sensors[c], v, noise[k, c])
             out_meas[k, c] = meas[c]
         u = control.step(ctrl, cs, meas, t_ref[k])
+        if hold.shape[0] > 0:
+            u = ratio_hold.valve(hs, meas, u, cs[control.CS_PHASE] == control.LOCKUP)
+            ext[u_slot + 1] = ratio_hold.step(hold, hs, meas, t_ref[k], cs[control.CS_PHASE] >= control.TORQUE)
         out_u[k] = u
         ext[u_slot] = u
-        if hold.shape[0] > 0:
-            ext[u_slot + 1] = ratio_hold.step(hold, hs, meas, t_ref[k], cs[control.CS_PHASE] >= control.TORQUE)
         ws.istate[IS_SETTLE] = 1
         status = advance(net, ext, ws, (k + 1) * dt, dt, 0.0, 1e-6, 1e-9, np.inf, out_t, out_x, out_aux, out_mode)
         if status != OK:

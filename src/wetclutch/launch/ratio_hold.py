@@ -5,8 +5,9 @@ its own accord: the primary flywheel and the vehicle are then one rigid system t
 the CVT, and the axle torque rings down to what the road load takes. Moving the ratio
 ``i = w_r / w_1`` makes the CVT output turn faster than the vehicle, winding up the axle:
 the kinetic energy of the primary flows on into the vehicle at the requested torque
-until a stated limit: the ratio's greatest value, the hold's time limit, or the CVT's rate
-limit no longer keeping up (the torque more than :data:`BAND` low at the full rate).
+until a stated limit: the ratio's greatest value, the hold's time limit (from its start), or
+the CVT's rate limit no longer keeping up (the torque more than :data:`BAND` low at the full
+rate; the ratio then goes on at its rate limit to a limit, so that the axle unwinds gently).
 
 Physics of the hold. With the clutch locked, ``J_a w_p' = -i T_r / eta`` (``J_a`` the
 primary side's inertia, power flowing forward) and the axle winds up at ``T_r' ~ k_a v``,
@@ -20,7 +21,8 @@ a PID-like feedback ``K_T e - K_v v + K_I int(e)`` on the torque error ``e = T_r
 and the speed across the axle as the locked driveline has it, ``v = i w_p - w_s`` from the
 measured speeds. The hold starts in the clutch's last slip (:data:`HOLD_SLIP`): ``v`` then
 counts that slip, and the ratio falling to ``w_s / w_p`` closes it, so that the lock does not
-make ``w_1`` jump and wind up the axle. With ``e' = -k_a v`` the loop's characteristic
+make ``w_1`` jump and wind up the axle (the launch controller's closing of the clutch waits
+for it: :func:`valve`). With ``e' = -k_a v`` the loop's characteristic
 polynomial is ``s^3 + K_v s^2 + k_a K_T s + k_a K_I``, placed at a triple pole
 :data:`POLE`. The ratio rate ``u / w_p`` is held within the CVT's rate limit and its
 ratio within its limits (the controller integrates its own command, which the CVT
@@ -66,6 +68,8 @@ HOLD_SLIP = 4.0
 #: BAND below the request: the flywheel has slowed past what the CVT can follow
 SAT_N = 20
 BAND = 0.1
+#: measured slip (rad/s) below which the clutch counts as locked in the hold, and the longest the valve waits for it, s
+LOCK_SLIP, LOCK_WAIT = 0.5, 0.2
 #: time limit of the hold by default, s
 HOLD_TIME = 3.0
 
@@ -73,8 +77,10 @@ HOLD_TIME = 3.0
 DT, J_A, ETA, K_A, R_MIN, R_MAX, RATE, T_LIMIT, KV, KT, KI = range(11)
 N_REC = 11
 # --- state
-(HS_ON, HS_DONE, HS_T, HS_RATIO, HS_Z, HS_ACC, HS_WS, HS_N, HS_REASON, HS_START, HS_SAT) = range(11)
-N_HS = 11
+(HS_ON, HS_DONE, HS_T, HS_RATIO, HS_Z, HS_ACC, HS_WS, HS_N, HS_REASON, HS_START, HS_SAT, HS_K, HS_SHUT) = range(13)
+#: the launch controller's last N_RING valve inputs (a ring), replayed while its lock-up waits
+HS_RING, N_RING = 13, 8
+N_HS = HS_RING + N_RING
 #: why the hold ended (HS_REASON)
 RUNNING, RATIO_LIMIT, TIME_LIMIT, NO_SPEED, RATE_LIMIT = range(5)
 REASONS = ("running", "ratio limit", "time limit", "primary at rest", "rate limit")
@@ -128,19 +134,25 @@ def step(rec, hs, meas, t_ref, engaged):
         hs[HS_START] = (hs[HS_N] - 1.0) * dt
     i = hs[HS_RATIO]
     w_p = meas[M_WP]
-    reason = RUNNING
-    if hs[HS_T] >= rec[T_LIMIT]:
-        reason = TIME_LIMIT
+    stop = RUNNING
+    if (hs[HS_N] - 1.0) * dt - hs[HS_START] >= rec[T_LIMIT]:
+        stop = TIME_LIMIT
     elif i >= rec[R_MAX]:
-        reason = RATIO_LIMIT
+        stop = RATIO_LIMIT
     elif w_p < W_MIN:
-        reason = NO_SPEED
-    elif hs[HS_SAT] >= SAT_N:
-        reason = RATE_LIMIT
-    if reason != RUNNING:
+        stop = NO_SPEED
+    if stop != RUNNING:
         hs[HS_DONE] = 1.0
-        hs[HS_REASON] = reason
+        if hs[HS_REASON] == RUNNING:
+            hs[HS_REASON] = stop
         return 0.0
+    hi = min(rec[RATE], (rec[R_MAX] - i) / dt)
+    if hs[HS_SAT] >= SAT_N:
+        # the hold is over; the ratio goes on at its rate limit (to its limit or the time limit), so that the
+        # axle unwinds gently: a ratio stopped here would let the slowing flywheel reverse the axle torque
+        hs[HS_REASON] = RATE_LIMIT
+        hs[HS_RATIO] = min(i + hi * dt, rec[R_MAX])
+        return hi
     hs[HS_T] += dt
     e = t_ref - meas[M_TR]
     # the speed across the axle as the locked driveline has it (w_r = i w_p): before the lock it already counts
@@ -149,7 +161,6 @@ def step(rec, hs, meas, t_ref, engaged):
     u = i * i * t_ref / (rec[ETA] * rec[J_A]) + hs[HS_Z] + rec[KT] * e - rec[KV] * v
     rate = u / w_p
     lo = max(-rec[RATE], (rec[R_MIN] - i) / dt)
-    hi = min(rec[RATE], (rec[R_MAX] - i) / dt)
     hs[HS_SAT] = hs[HS_SAT] + 1.0 if (rate > rec[RATE] and e > BAND * t_ref) else 0.0
     if rate > hi:
         rate = hi
@@ -165,6 +176,26 @@ def step(rec, hs, meas, t_ref, engaged):
     return rate
 
 
+@_jit
+def valve(hs, meas, u, lockup):
+    """The valve input ``u`` of the launch controller, with the hold: its lock-up (``lockup``: the input that
+    closes the clutch firmly) waits until the ratio has closed the last slip.
+
+    While the clutch slips the axle torque follows the clutch torque (the CVT input is light); closing the
+    clutch on a slip left would jolt the axle. Until the measured slip is below :data:`LOCK_SLIP` (or for at most
+    :data:`LOCK_WAIT`) the torque loop's last inputs are replayed: their mean and the dither on it, which keeps
+    the valve stem from sticking (a steady input lets the pressure sag)."""
+    k = int(hs[HS_K])
+    hs[HS_K] = k + 1
+    if not lockup:
+        hs[HS_RING + k % N_RING] = u
+        return u
+    if hs[HS_SHUT] == 0.0 and hs[HS_ON] != 0.0 and hs[HS_T] < LOCK_WAIT and abs(meas[M_WP] - meas[M_W1]) >= LOCK_SLIP:
+        return hs[HS_RING + k % N_RING]
+    hs[HS_SHUT] = 1.0
+    return u
+
+
 def summary(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, ratio: np.ndarray, t_sync: float | None,
             hs: np.ndarray, band: float = BAND) -> dict[str, Any]:
     """Figures of the hold from the true axle torque ``T_r`` (N m), the request and the CVT's ratio on times ``t``.
@@ -175,8 +206,7 @@ def summary(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, ratio: np.ndarray
     """
     out: dict[str, Any] = {"post_sync_hold": True, "hold_s": float(hs[HS_T]),
                            "hold_start_s": float(hs[HS_START]) if hs[HS_ON] else None,
-                           "hold_end": REASONS[int(hs[HS_REASON])] if hs[HS_DONE] else
-                           (REASONS[RUNNING] if hs[HS_ON] else "not started"),
+                           "hold_end": REASONS[int(hs[HS_REASON])] if hs[HS_ON] else "not started",
                            "ratio_start": float(ratio[0]), "ratio_end": float(ratio[-1]),
                            "ratio_min_run": float(np.min(ratio)), "ratio_max_run": float(np.max(ratio)),
                            "held_in_band_s": 0.0, "hold_T_r_err_max_pct": None, "hold_T_r_err_rms_pct": None}
