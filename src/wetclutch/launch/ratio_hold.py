@@ -34,7 +34,8 @@ rate needed, ``i^2 T_ref / (eta J_a w_p)``, grows without bound: the rate limit 
 end the ratio limit) is met before the energy is gone, and the torque then falls away. A
 small request locks late (a long slip phase, at a lower primary speed) but draws little
 power; a large one locks early with more energy left but draws it fast: on the default
-rig requests of about 15 to 30 N m hold for a second or more, 100 N m for a fifth of one.
+rig requests of 15 to 35 N m hold for a second or more (within 10 %), 40 N m for just under
+one, 100 N m for about a third of one.
 
 The record (:func:`pack`) and the state vector are flat float arrays; this module names
 their slots and alone packs the record.
@@ -69,7 +70,7 @@ HOLD_SLIP = 4.0
 SAT_N = 20
 BAND = 0.1
 #: measured slip (rad/s) below which the clutch counts as locked in the hold, and the longest the valve waits for it, s
-LOCK_SLIP, LOCK_WAIT = 0.5, 0.2
+LOCK_SLIP, LOCK_WAIT = 0.25, 0.2
 #: time limit of the hold by default, s
 HOLD_TIME = 3.0
 
@@ -148,8 +149,11 @@ def step(rec, hs, meas, t_ref, engaged):
         return 0.0
     hi = min(rec[RATE], (rec[R_MAX] - i) / dt)
     if hs[HS_SAT] >= SAT_N:
-        # the hold is over; the ratio goes on at its rate limit (to its limit or the time limit), so that the
-        # axle unwinds gently: a ratio stopped here would let the slowing flywheel reverse the axle torque
+        # the hold is over (it ended when the rate limit was first met with the torque low); the ratio goes on at
+        # its rate limit (to its limit or the time limit), so that the axle unwinds gently: a ratio stopped here
+        # would let the slowing flywheel reverse the axle torque
+        if hs[HS_REASON] == RUNNING:
+            hs[HS_T] -= SAT_N * dt
         hs[HS_REASON] = RATE_LIMIT
         hs[HS_RATIO] = min(i + hi * dt, rec[R_MAX])
         return hi
