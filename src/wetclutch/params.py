@@ -113,7 +113,8 @@ class Driveline(_Section):
     b_2: float = _f(5e-5, "N m s^2", "secondary air drag coefficient (T = b_2 w|w|)", ge=0.0, le=1.0)
     ratio: float = _f(0.5, "-", "CVT speed ratio i = w_r / w_1", gt=0.05, le=20.0)
     eta: float = _f(0.95, "-", "CVT efficiency, either power-flow direction", gt=0.0, le=1.0)
-    ratio_min: float = _f(0.4, "-", "least CVT ratio w_r / w_1 when the ratio moves (full underdrive)", gt=0.05, le=20.0)
+    ratio_min: float = _f(0.4, "-", "least CVT ratio w_r / w_1 when the ratio moves (full underdrive)", gt=0.05,
+                          le=20.0)
     ratio_max: float = _f(2.5, "-", "greatest CVT ratio w_r / w_1 when the ratio moves (full overdrive)", gt=0.05,
                           le=20.0)
     ratio_rate: float = _f(1.0, "1/s", "fastest change of the CVT ratio w_r / w_1, either way", gt=0.0, le=100.0)

@@ -133,7 +133,8 @@ def _hold_ratios(t, x, net, ext, fstate):
 
 @jit_inline
 def _onto_ratio(x, net, k, r):
-    """Gear ``k``'s speeds onto ``w_out = r w_in`` by the least change of kinetic energy (a massless side moves alone)."""
+    """Gear ``k``'s speeds onto ``w_out = r w_in`` by the least change of kinetic energy (a massless side moves
+    alone)."""
     i_in = net.gr_in[k]
     o = net.gr_out[k]
     e = x[o] - r * x[i_in]

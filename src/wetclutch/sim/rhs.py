@@ -11,9 +11,10 @@ Sign conventions (as in Modelica ``Mechanics.Rotational``): every element joins 
   (``lam * w_out > 0``) and ``c = eta`` when it flows back, so losses never create power.
   A moving ratio (a CVT shifting) is a state ``r`` with ``r' = rate(t)``, the commanded
   rate held within the gear's rate limit; reaching a ratio limit is an event, after which
-  it is held there (a mode) until the command turns back. Its constraint differentiates to ``a_out - r a_in = r' w_in``: the
-  row gets that velocity term. The ideal gear still does no work of its own (power in
-  equals power out for ``eta = 1``, whatever ``r'``), so the energy account is unchanged.
+  it is held there (a mode) until the command turns back. Its constraint differentiates
+  to ``a_out - r a_in = r' w_in``: the row gets that velocity term. The ideal gear still
+  does no work of its own (power in equals power out for ``eta = 1``, whatever ``r'``), so
+  the energy account is unchanged.
 * spring-damper: deflection ``phi' = w_a - w_b``; torque ``k phi + d (w_a - w_b)`` on
   ``b``, its negative on ``a``.
 
