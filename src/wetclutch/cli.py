@@ -171,7 +171,9 @@ def _cmd_launch(args: argparse.Namespace) -> None:
     from .launch import adaptation
 
     cond = launch.Conditions(t_ref=args.t_ref, profile=args.profile, oil_temp_C=args.oil_temp, seed=args.seed,
-                             noise=not args.no_noise, noise_scale=args.noise_scale)
+                             noise=not args.no_noise, noise_scale=args.noise_scale,
+                             post_sync_hold=args.post_sync_hold,
+                             **({} if args.hold_time is None else {"hold_time": args.hold_time}))
     start = adaptation.load(args.adaptation) if args.adaptation else None
     runs = launch.sequence(p, d, cond, args.sequence, start)
     res = runs[-1]
@@ -183,6 +185,9 @@ def _cmd_launch(args: argparse.Namespace) -> None:
           f"(settled {fmt(s['t95_settled_s'], '.3f')} s), overshoot {fmt(s['overshoot_pct'], '.1f')} %, "
           f"creep {fmt(s['creep_Nm'], '.1f')} N m, t_sync {fmt(s['t_sync_s'], '.2f')} s, "
           f"plate {s['T_plate_peak_C']:.1f} C; {req} -> {args.out}")
+    if cond.post_sync_hold:
+        print(f"post-sync hold: {s['hold_s']:.2f} s ({s['hold_end']}), axle torque within 10 % of the request for "
+              f"{s['held_in_band_s']:.2f} s after lock-up, ratio {s['ratio_start']:.2f} -> {s['ratio_end']:.2f}")
     if s["T_plate_over_limit"]:
         print(f"warning: clutch plates reached {s['T_plate_peak_C']:.1f} C, above the limit "
               f"thermal.T_plate_limit_C = {s['T_plate_limit_C']:g} C", file=sys.stderr)
@@ -370,6 +375,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help="launch the clutch N times, the controller's adaptation carried over (default 1)")
     lau.add_argument("--adaptation", metavar="A.toml", help="adaptation state to start from (written as "
                                                              "DIR/adaptation.toml after the launches)")
+    lau.add_argument("--post-sync-hold", action="store_true",
+                     help="after lock-up, move the CVT ratio (within driveline.ratio_min/_max/_rate) to hold the axle "
+                          "torque at the request")
+    lau.add_argument("--hold-time", type=float, metavar="S", help="time limit of the post-sync hold, s (default 3)")
     _param_args(lau)
     lau.set_defaults(func=_cmd_launch)
 

@@ -20,6 +20,13 @@ Default values and why (see also ``docs/model.md``, "Default parameters"):
   dividing it by 10 moves no reported figure by more than 0.5 %.
 * ``ratio`` 0.5 (``w_r / w_1``, an underdrive launch ratio) and ``eta`` 0.95
   (the study's constant CVT efficiency).
+* ``ratio_min`` 0.4, ``ratio_max`` 2.5 and ``ratio_rate`` 1 /s: the limits of the CVT when
+  its ratio moves (``wetclutch launch --post-sync-hold``); the study's CVT has none stated.
+  A passenger-car push-belt CVT spans a ratio coverage of about 6: from 2.5 (underdrive)
+  to 0.4 (overdrive) as input over output speed, so ``w_r / w_1`` from 0.4 to 2.5, with the
+  launch ratio near the low end. Its hydraulically clamped pulleys shift at most about
+  0.3 to 1 ratio units per second (the flow of the pulley actuators limits it); 1 /s is
+  the fast end, a kickdown, which is what holding the torque after lock-up asks for.
 * ``k_a`` 480 N m/rad: the locked driveline then rings at 2.1 Hz, the study's
   measured resonance. With power flowing alternately forward and back
   through the CVT, the half periods use the primary inertia seen through
@@ -106,6 +113,11 @@ class Driveline(_Section):
     b_2: float = _f(5e-5, "N m s^2", "secondary air drag coefficient (T = b_2 w|w|)", ge=0.0, le=1.0)
     ratio: float = _f(0.5, "-", "CVT speed ratio i = w_r / w_1", gt=0.05, le=20.0)
     eta: float = _f(0.95, "-", "CVT efficiency, either power-flow direction", gt=0.0, le=1.0)
+    ratio_min: float = _f(0.4, "-", "least CVT ratio w_r / w_1 when the ratio moves (full underdrive)", gt=0.05,
+                          le=20.0)
+    ratio_max: float = _f(2.5, "-", "greatest CVT ratio w_r / w_1 when the ratio moves (full overdrive)", gt=0.05,
+                          le=20.0)
+    ratio_rate: float = _f(1.0, "1/s", "fastest change of the CVT ratio w_r / w_1, either way", gt=0.0, le=100.0)
     k_a: float = _f(480.0, "N m/rad", "flexible axle torsional stiffness", gt=0.0, le=1e8)
     # The study gives no damping figure. 5 N m s/rad keeps the slip phase free of
     # friction-induced judder: above 79 rad/s the study's mu(slip) falls with slip, a

@@ -10,7 +10,9 @@ and the engine advances to the next sample. The whole loop runs compiled
 
 The clutch is in standby from t = 0; the torque request comes at
 ``t_request`` (1 s); the run goes on through synchronisation and stops
-``t_after`` seconds after the clutch has locked for good (or at ``t_max``).
+``t_after`` seconds after the clutch has locked for good (or at ``t_max``). With
+``post_sync_hold`` the CVT's ratio moves after lock-up to hold the axle torque
+(:mod:`wetclutch.launch.ratio_hold`), and the run goes on through the hold's time limit.
 """
 
 from __future__ import annotations
@@ -30,12 +32,12 @@ from ..plant import clutch
 from ..rig.sensors import filter_sample, reading, sensor_table
 from ..sim.integrator import advance
 from ..sim.network import Trajectory, failure, outputs
-from ..sim.rhs import spring_torque
+from ..sim.rhs import ratio, spring_torque
 from ..sim.signals import External
 from ..sim.workspace import IS_SETTLE, LOCKED, OK, new_workspace
 from . import controller as control
 from . import design as design_
-from . import metrics
+from . import metrics, ratio_hold
 from .adaptation import Adaptation
 
 _jit = njit(cache=True, error_model="numpy")
@@ -67,14 +69,15 @@ def _true_values(net, x, probe, temp, truth):
     truth[control.M_TR] = spring_torque(net, probe[control.M_TR], x)[0]
     for c in (control.M_WP, control.M_W1, control.M_WR, control.M_WS):
         truth[c] = x[probe[c]]
-    truth[control.M_RATIO] = net.gr_ratio[probe[control.M_RATIO]]
+    truth[control.M_RATIO] = ratio(x, net, probe[control.M_RATIO])
     truth[control.M_TEMP] = temp
 
 
 @_jit
-def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, t_ref, dt, t_after,
+def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, hold, hs, t_ref, dt, t_after,
                  out_t, out_x, out_aux, out_mode, out_meas, out_u):
-    """Run the sampled loop; returns (status, number of samples)."""
+    """Run the sampled loop (with a ratio ``hold`` record, the CVT's ratio rate goes to the input slot after
+    ``u_slot``); returns (status, number of samples)."""
     n = t_ref.shape[0]
     truth = np.zeros(N_CH)
     meas = np.zeros(N_CH)
@@ -87,6 +90,9 @@ def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, t_
             meas[c] = reading(sensors[c], v, noise[k, c])
             out_meas[k, c] = meas[c]
         u = control.step(ctrl, cs, meas, t_ref[k])
+        if hold.shape[0] > 0:
+            u = ratio_hold.valve(hs, meas, u, cs[control.CS_PHASE] == control.LOCKUP)
+            ext[u_slot + 1] = ratio_hold.step(hold, hs, meas, t_ref[k], cs[control.CS_PHASE] >= control.TORQUE)
         out_u[k] = u
         ext[u_slot] = u
         ws.istate[IS_SETTLE] = 1
@@ -128,6 +134,8 @@ class Conditions:
     seed: int = 0
     noise: bool = True
     noise_scale: float = 1.0
+    post_sync_hold: bool = False
+    hold_time: float = ratio_hold.HOLD_TIME
 
     def checked(self) -> Conditions:
         if not 0.0 < self.t_ref <= 1000.0:
@@ -144,6 +152,8 @@ class Conditions:
             raise WetclutchError(f"controller sample time must be in 0.1..10 ms (got {self.dt * 1e3:g} ms)")
         if not self.t_request + 0.5 < self.t_max <= 120.0:
             raise WetclutchError(f"t_max must be in (t_request + 0.5, 120] s (got {self.t_max:g})")
+        if not 0.0 < self.hold_time <= 60.0:
+            raise WetclutchError(f"--hold-time must be in (0, 60] s (got {self.hold_time:g})")
         return self
 
 
@@ -218,7 +228,10 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     cond = (conditions or Conditions()).checked()
     temp = p.rig.oil_temp_C if cond.oil_temp_C is None else float(cond.oil_temp_C)
     ctrl = design_.record(d, cond.dt)
-    rn = clutch.build(p, External(0), pwm=False, config="clutch", temp_C=temp)
+    hold = ratio_hold.pack(p, cond.dt, cond.hold_time) if cond.post_sync_hold else np.zeros(0)
+    hs = ratio_hold.initial_state(p)
+    rn = clutch.build(p, External(0), pwm=False, config="clutch", temp_C=temp,
+                      ratio_rate=External(1) if cond.post_sync_hold else None)
     net, x0, ext = rn.network.compile()
     ws = new_workspace(net, x0)
     n = int(round(cond.t_max / cond.dt))
@@ -237,8 +250,9 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     cs[control.CS_KISS] = d.settings["p_kiss"] if start is None else start
     if d.kind == "launch":
         cs[control.CS_THETA_START] = learnt.friction_factor(temp) or 0.0
-    status, m = _closed_loop(net, ext, ws, 0, probe, temp, sensors, noise, ctrl, cs, t_ref, cond.dt, cond.t_after,
-                             *out, out_meas, out_u)
+    t_after = cond.t_after + (cond.hold_time if cond.post_sync_hold else 0.0)
+    status, m = _closed_loop(net, ext, ws, 0, probe, temp, sensors, noise, ctrl, cs, hold, hs, t_ref, cond.dt,
+                             t_after, *out, out_meas, out_u)
     if status != OK:
         raise SimulationError(f"launch simulation failed: {failure(rn.network, ws, status)}")
     tr = Trajectory.from_run(rn.network, ws, *out, m)
@@ -272,6 +286,9 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
                 else None)
     summary.update(friction_factor_start=learnt.friction_factor(temp) if d.kind == "launch" else None,
                    friction_factor_found=friction)
+    if cond.post_sync_hold:
+        signals["ratio"] = tr.ratio("cvt")
+        summary.update(ratio_hold.summary(tr.t, truth["T_r"].to_numpy(), t_ref[:m], tr.ratio("cvt"), t_sync, hs))
     if found is not None:
         learnt = learnt.learn(temp, found, friction)
     return LaunchResult(signals, truth, summary, cond, d.kind, tr.stats, found, learnt)

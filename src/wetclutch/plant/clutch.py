@@ -51,16 +51,17 @@ class RigNetwork:
 
 
 def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str = "clutch", temp_C: float | None = None,
-          plate_temp_C: float | None = None) -> RigNetwork:
+          plate_temp_C: float | None = None, ratio_rate: Signal | None = None) -> RigNetwork:
     """The rig network driven by input ``u`` (V in DC mode, duty in PWM mode); the clutch's plates start at
-    ``plate_temp_C`` (the oil's if None)."""
+    ``plate_temp_C`` (the oil's if None); with ``ratio_rate`` (1/s) the CVT's ratio moves
+    (:func:`wetclutch.plant.driveline.build`)."""
     if config not in CONFIGS:
         raise ValueError(f"config must be one of {CONFIGS}")
     temp = params.rig.oil_temp_C if temp_C is None else float(temp_C)
     v = params.valve
     if config == "clutch":
         f = params.friction
-        net = driveline.build(params, 0.0, temp_C=temp, plate_temp_C=plate_temp_C)
+        net = driveline.build(params, 0.0, temp_C=temp, plate_temp_C=plate_temp_C, ratio_rate=ratio_rate)
         ci = 0  # the driveline's clutch
         net.clutches[ci].mu_poly = tuple(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_ref))
         # cold oil drags the open plates: viscous torque proportional to viscosity

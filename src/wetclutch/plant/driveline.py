@@ -44,11 +44,13 @@ COLUMNS = {
 
 
 def build(params: Params, capacity: Signal | float, road_load: Signal | float | None = None, *,
-          temp_C: float | None = None, plate_temp_C: float | None = None) -> Network:
+          temp_C: float | None = None, plate_temp_C: float | None = None, ratio_rate: Signal | None = None) -> Network:
     """The driveline network with clutch capacity ``capacity(t)`` (N m) and road load (N m).
 
     The clutch pack heats up with its slip power and is cooled by the oil at ``temp_C``
     (``rig.oil_temp_C`` if None); its plates start at ``plate_temp_C`` (the oil's if None).
+    With ``ratio_rate`` (1/s) the CVT's ratio moves at that commanded rate within the limits
+    ``driveline.ratio_min``, ``ratio_max`` and ``ratio_rate``; without it the ratio is constant.
     """
     d = params.driveline
     net = Network()
@@ -59,7 +61,11 @@ def build(params: Params, capacity: Signal | float, road_load: Signal | float | 
     ci = net.clutch("clutch", p, one, capacity, peak=params.clutch.peak)
     net.thermal(ci, thermal.pack(params, params.rig.oil_temp_C if temp_C is None else temp_C, plate_temp_C))
     net.brake("brake", s, params.engage.T_load if road_load is None else road_load)
-    net.gear("cvt", one, r, d.ratio, d.eta)
+    if ratio_rate is None:
+        net.gear("cvt", one, r, d.ratio, d.eta)
+    else:
+        net.gear("cvt", one, r, d.ratio, d.eta, rate=ratio_rate, ratio_range=(d.ratio_min, d.ratio_max),
+                 rate_max=d.ratio_rate)
     net.spring("axle", r, s, d.k_a, d.d_a)
     return net
 

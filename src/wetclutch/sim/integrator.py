@@ -32,7 +32,7 @@ def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
     """State and event functions at ``theta_t`` inside the last step (fixed modes)."""
     dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
     rhs(theta_t, False, ws.y_tmp, net, ext, ws, ws.dx, ws.aux_new, False)
-    events(ws.y_tmp, ws.aux_new, net, ws.clm, ws.grm, ws.g_new)
+    events(ws.y_tmp, ws.aux_new, net, ws.clm, ws.grm, ws.g_new, ws.fstate)
 
 
 @jit_inline
@@ -81,7 +81,7 @@ def _restart(ws, net, ext):
         forget(ws.fact)
         return False
     copy(ws.K[0], ws.dx)
-    events(ws.x, ws.aux, net, ws.clm, ws.grm, ws.g_old)
+    events(ws.x, ws.aux, net, ws.clm, ws.grm, ws.g_old, ws.fstate)
     ws.istate[IS_SETTLE] = 0
     return True
 
@@ -275,7 +275,7 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
             ws.istate[IS_REJECTED] += 1
             continue
         ws.istate[IS_STEPS] += 1
-        events(ws.y_new, ws.aux_new, net, ws.clm, ws.grm, ws.g_new)
+        events(ws.y_new, ws.aux_new, net, ws.clm, ws.grm, ws.g_new, ws.fstate)
         t_ev, e_ev = _locate_event(t, t_new, h, y_old, ws, net, ext)
         _emit_grid(t, t_new if t_ev == np.inf else t_ev, h, y_old, ws, net, ext, dt_out, t_out0,
                    out_t, out_x, out_aux, out_mode)

@@ -4,7 +4,10 @@ At an event the modes are re-decided from the state (:func:`settle`): a clutch a
 slip is tried locked, the locked clutch most beyond its static capacity is released in
 the direction of its constraint torque, gears are set by the direction of power flow
 and stick at standstill while their friction bounds hold. Newly locked pairs are
-projected onto their inertia-weighted common speed.
+projected onto their inertia-weighted common speed; a moving ratio is put back within its
+limits (an event leaves it a rounding beyond) and its gear's speeds onto ``w_out = r w_in``
+(the integrator keeps that constraint at the acceleration level, where a moving ratio lets
+it drift by the local error).
 """
 
 from __future__ import annotations
@@ -12,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from .compiled import jit, jit_inline
-from .rhs import capacity, hold_margins, poly, rhs, slip
-from .workspace import FREE, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets
+from .rhs import LIM_MAX, LIM_MIN, capacity, hold_margins, poly, rate_command, ratio, rhs, slip
+from .workspace import FREE, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets, fs_ratio
 
 
 @jit_inline
@@ -80,7 +83,8 @@ def _first_guess(t, x, net, ext, clm, grm):
 
 @jit_inline
 def _project(x, net, clm, grm):
-    """Stuck gears to standstill, locked pairs onto their inertia-weighted common speed."""
+    """Stuck gears to standstill, locked pairs onto their inertia-weighted common speed, moving ratios
+    within their limits and their gears' speeds onto the ratio."""
     for k in range(net.gr_in.shape[0]):
         if abs(grm[k]) == STUCK:
             x[net.gr_in[k]] = 0.0
@@ -100,6 +104,46 @@ def _project(x, net, clm, grm):
                     w = 0.5 * (x[a] + x[b])
                 x[a] = w
                 x[b] = w
+    for k in range(net.gr_in.shape[0]):
+        i = net.gr_state[k]
+        if i >= 0:
+            x[i] = min(max(x[i], net.gr_lim[k, LIM_MIN]), net.gr_lim[k, LIM_MAX])
+            if abs(grm[k]) != STUCK:
+                _onto_ratio(x, net, k, x[i])
+
+
+@jit_inline
+def _hold_ratios(t, x, net, ext, fstate):
+    """A moving ratio at a limit with its command pushing beyond is held there (a mode that lasts until the
+    command turns back, an event); the others move."""
+    ng = net.gr_in.shape[0]
+    o = fs_ratio(net.cl_a.shape[0]) + ng
+    for k in range(ng):
+        i = net.gr_state[k]
+        if i < 0:
+            continue
+        rate = rate_command(t, False, net, ext, k)
+        if rate < 0.0 and x[i] <= net.gr_lim[k, LIM_MIN]:
+            fstate[o + k] = -1.0
+        elif rate > 0.0 and x[i] >= net.gr_lim[k, LIM_MAX]:
+            fstate[o + k] = 1.0
+        else:
+            fstate[o + k] = 0.0
+
+
+@jit_inline
+def _onto_ratio(x, net, k, r):
+    """Gear ``k``'s speeds onto ``w_out = r w_in`` by the least change of kinetic energy (a massless side moves
+    alone)."""
+    i_in = net.gr_in[k]
+    o = net.gr_out[k]
+    e = x[o] - r * x[i_in]
+    den = net.J[i_in] + r * r * net.J[o]
+    if den > 0.0:
+        x[i_in] += r * net.J[o] * e / den
+        x[o] -= net.J[i_in] * e / den
+    else:
+        x[o] -= e
 
 
 @jit_inline
@@ -113,10 +157,10 @@ def _gear_modes(x, dx, aux, net, grm, released):
         o = net.gr_out[k]
         lam = aux[o_gear_out + k]
         if abs(grm[k]) == STUCK:
-            q = -aux[o_gear_in + k] / net.gr_ratio[k]
+            q = -aux[o_gear_in + k] / ratio(x, net, k)
             ref = lam if lam != 0.0 else q
             grm[k] = -STUCK if ref < 0.0 else STUCK
-            m_in, m_out = hold_margins(aux, net, grm, k)
+            m_in, m_out = hold_margins(aux, x, net, grm, k)
             if m_in < 0.0:
                 grm[k] = -1  # the output side overcomes the input: power flows back
             elif m_out < 0.0:
@@ -200,6 +244,7 @@ def settle(t, net, ext, ws):
     redundant = False
     for _ in range(4 * (nc + ng) + 4):
         _project(x, net, clm, grm)
+        _hold_ratios(t, x, net, ext, ws.fstate)
         if not rhs(t, False, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm)):
             forget(ws.fact)
             return False

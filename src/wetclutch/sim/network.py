@@ -50,8 +50,11 @@ class NetArrays(NamedTuple):
     cl_oneway: np.ndarray  # (nc,) int, 1: one-way clutch (freewheel), b may overrun a, a never overruns b
     gr_in: np.ndarray  # (ng,) int
     gr_out: np.ndarray  # (ng,) int
-    gr_ratio: np.ndarray  # (ng,) w_out / w_in
+    gr_ratio: np.ndarray  # (ng,) w_out / w_in (the initial one of a moving ratio)
     gr_eta: np.ndarray  # (ng,) efficiency
+    gr_state: np.ndarray  # (ng,) int state index of a moving ratio, -1: constant
+    gr_rate_sig: np.ndarray  # (ng,) int signal index of a moving ratio's commanded rate (1/s), -1: constant
+    gr_lim: np.ndarray  # (ng, 3) a moving ratio's least and greatest ratio and its rate limit (1/s)
     sp_a: np.ndarray  # (ns,) int
     sp_b: np.ndarray  # (ns,) int, -1 = ground
     sp_k: np.ndarray  # (ns,) N m / rad
@@ -91,6 +94,9 @@ class _Gear:
     b: int
     ratio: float
     eta: float
+    rate: Signal | None = None  # commanded ratio rate, 1/s (None: constant ratio)
+    ratio_range: tuple[float, float] = (np.nan, np.nan)
+    rate_max: float = np.inf
 
 
 @dataclass
@@ -188,13 +194,29 @@ class Network:
         """A clutch from body ``a`` to the ground."""
         return self.clutch(name, a, GROUND, capacity, peak)
 
-    def gear(self, name: str, a: int, b: int, ratio: float, eta: float = 1.0) -> int:
-        """Ideal gear / CVT with ``w_b = ratio * w_a`` and efficiency ``eta`` in either direction."""
+    def gear(self, name: str, a: int, b: int, ratio: float, eta: float = 1.0, *, rate: Signal | float | None = None,
+             ratio_range: tuple[float, float] | None = None, rate_max: float = np.inf) -> int:
+        """Ideal gear / CVT with ``w_b = ratio * w_a`` and efficiency ``eta`` in either direction.
+
+        With ``rate`` (1/s) the ratio moves: it starts at ``ratio`` and changes at the commanded
+        rate, limited to ``rate_max`` either way and held within ``ratio_range`` (least, greatest;
+        one sign); reaching a limit is an event. Without it the ratio is constant.
+        """
         if ratio == 0.0:
             raise ValueError(f"gear {name!r}: ratio must be non-zero")
         if not 0.0 < eta <= 1.0:
             raise ValueError(f"gear {name!r}: efficiency must be in (0, 1]")
-        self.gears.append(_Gear(name, a, b, float(ratio), float(eta)))
+        gear = _Gear(name, a, b, float(ratio), float(eta))
+        if rate is not None:
+            if ratio_range is None:
+                raise ValueError(f"gear {name!r}: a moving ratio needs its ratio_range")
+            lo, hi = float(ratio_range[0]), float(ratio_range[1])
+            if not (lo <= ratio <= hi and (lo > 0.0 or hi < 0.0)):
+                raise ValueError(f"gear {name!r}: ratio_range must hold the ratio and not contain 0")
+            if not rate_max > 0.0:
+                raise ValueError(f"gear {name!r}: rate_max must be > 0")
+            gear.rate, gear.ratio_range, gear.rate_max = as_signal(rate), (lo, hi), float(rate_max)
+        self.gears.append(gear)
         return len(self.gears) - 1
 
     def spring(self, name: str, a: int, b: int, k: float, d: float = 0.0, phi0: float = 0.0) -> int:
@@ -251,7 +273,16 @@ class Network:
     # -------------------------------------------------------------- layout
     @property
     def n_state(self) -> int:
+        return self.ratio_state + len(self._moving())
+
+    @property
+    def ratio_state(self) -> int:
+        """Index of the first moving ratio in the state vector (after the heated pack's states)."""
         return self.thermal_state + (th_mod.N_STATES if self.heat is not None else 0)
+
+    def _moving(self) -> list[int]:
+        """Indices of the gears whose ratio moves, in the order of their states."""
+        return [k for k, g in enumerate(self.gears) if g.rate is not None]
 
     @property
     def thermal_state(self) -> int:
@@ -276,7 +307,9 @@ class Network:
         for c in self.clutches:
             if c.a == GROUND:
                 raise ValueError(f"clutch {c.name!r}: flange a must be a body")
-        signals: list[Signal] = [c.capacity for c in self.clutches] + [s.torque for s in self.sources]
+        moving = self._moving()
+        signals: list[Signal] = ([c.capacity for c in self.clutches] + [s.torque for s in self.sources]
+                                 + [self.gears[k].rate for k in moving])
         if self.act is not None:
             signals.append(self.act.u)
         sig, tab, bps, ext = compile_signals(signals)
@@ -298,6 +331,14 @@ class Network:
             poly[j, npoly - len(c.mu_poly) :] = c.mu_poly
         ints = lambda v: np.asarray(v, dtype=np.int64)  # noqa: E731
         floats = lambda v: np.asarray(v, dtype=np.float64)  # noqa: E731
+        nsrc = len(self.sources)
+        gr_state = np.full(len(self.gears), -1, dtype=np.int64)
+        gr_rate_sig = np.full(len(self.gears), -1, dtype=np.int64)
+        gr_lim = np.zeros((len(self.gears), 3))
+        for i, k in enumerate(moving):
+            g = self.gears[k]
+            gr_state[k], gr_rate_sig[k] = self.ratio_state + i, nc + nsrc + i
+            gr_lim[k] = (*g.ratio_range, g.rate_max)
         net = NetArrays(
             J=floats([b.J for b in self.bodies]),
             drag=floats([b.drag for b in self.bodies]),
@@ -311,12 +352,15 @@ class Network:
             gr_out=ints([g.b for g in self.gears]),
             gr_ratio=floats([g.ratio for g in self.gears]),
             gr_eta=floats([g.eta for g in self.gears]),
+            gr_state=gr_state,
+            gr_rate_sig=gr_rate_sig,
+            gr_lim=gr_lim,
             sp_a=ints([s.a for s in self.springs]),
             sp_b=ints([s.b for s in self.springs]),
             sp_k=floats([s.k for s in self.springs]),
             sp_d=floats([s.d for s in self.springs]),
             src_body=ints([s.body for s in self.sources]),
-            src_sig=ints(range(nc, nc + len(self.sources))),
+            src_sig=ints(range(nc, nc + nsrc)),
             sig=sig,
             tab=tab,
             bps=bps,
@@ -327,7 +371,8 @@ class Network:
         x0[:nb] = [b.w0 for b in self.bodies]
         x0[nb : nb + len(self.springs)] = [s.phi0 for s in self.springs]
         if self.heat is not None:
-            x0[self.thermal_state :] = th_mod.initial_states(th)
+            x0[self.thermal_state : self.ratio_state] = th_mod.initial_states(th)
+        x0[self.ratio_state :] = [self.gears[k].ratio for k in moving]
         return net, x0, ext
 
 
@@ -363,7 +408,8 @@ class Trajectory:
         m = int(ws.istate[wsp.IS_N_OUT]) if n is None else min(n, int(ws.istate[wsp.IS_N_OUT]))
         n_ev = min(int(ws.istate[wsp.IS_N_LOG]), ws.evlog.shape[0])
         return cls(network=network, t=out_t[:m], x=out_x[:m], aux=out_aux[:m], modes=out_mode[:m],
-                   events=ws.evlog[:n_ev].copy(), locks=ws.fstate[wsp.FS_LOCKS:].reshape(-1, 2).copy(),
+                   events=ws.evlog[:n_ev].copy(),
+                   locks=ws.fstate[wsp.FS_LOCKS:wsp.fs_ratio.py_func(len(network.clutches))].reshape(-1, 2).copy(),
                    stats={"steps": int(ws.istate[wsp.IS_STEPS]), "rejected": int(ws.istate[wsp.IS_REJECTED]),
                           "events": int(ws.istate[wsp.IS_EVENTS]), "mode_switches": int(ws.istate[wsp.IS_SWITCHES])})
 
@@ -391,6 +437,15 @@ class Trajectory:
 
     def gear_torque(self, gear: str) -> np.ndarray:
         return self._aux(2, self._idx(self.network.gears, gear))
+
+    def ratio(self, gear: str) -> np.ndarray:
+        """The gear's ratio ``w_out / w_in`` over time (constant unless it moves)."""
+        net = self.network
+        k = self._idx(net.gears, gear)
+        moving = net._moving()
+        if k not in moving:
+            return np.full(self.t.size, net.gears[k].ratio)
+        return self.x[:, net.ratio_state + moving.index(k)]
 
     def spring_torque(self, spring: str) -> np.ndarray:
         return self._aux(3, self._idx(self.network.springs, spring))
@@ -482,6 +537,9 @@ def _event_source(network: Network, e: int) -> str:
     nc = len(network.clutches)
     if 0 <= e < 2 * nc:
         return f"clutch {network.clutches[e // 2].name!r}"
+    ng = len(network.gears)
+    if e >= 2 * nc + 2 * ng:
+        return f"gear {network.gears[e - 2 * nc - 2 * ng].name!r} (its ratio limits)"
     if e >= 2 * nc:
         return f"gear {network.gears[(e - 2 * nc) // 2].name!r}"
     return "unknown element"

@@ -9,13 +9,20 @@ Sign conventions (as in Modelica ``Mechanics.Rotational``): every element joins 
 * gear (``in`` = a, ``out`` = b): ``w_out = ratio * w_in``; its torque ``lam`` acts on
   ``out``, and ``-ratio * c * lam`` on ``in`` with ``c = 1/eta`` when power flows in -> out
   (``lam * w_out > 0``) and ``c = eta`` when it flows back, so losses never create power.
+  A moving ratio (a CVT shifting) is a state ``r`` with ``r' = rate(t)``, the commanded
+  rate held within the gear's rate limit; reaching a ratio limit is an event, after which
+  it is held there (a mode) until the command turns back. Its constraint differentiates
+  to ``a_out - r a_in = r' w_in``: the row gets that velocity term. The ideal gear still
+  does no work of its own (power in equals power out for ``eta = 1``, whatever ``r'``), so
+  the energy account is unchanged.
 * spring-damper: deflection ``phi' = w_a - w_b``; torque ``k phi + d (w_a - w_b)`` on
   ``b``, its negative on ``a``.
 
 Locked clutches and gears are acceleration constraints, solved together with the bodies
-in one small linear (KKT) system ``[M B; G 0] [a; lam] = [f; 0]``. Its matrix depends on
-the modes only, so it is factored when they change and the columns of its inverse that
-multiply the body torques are kept: every other evaluation is a small matrix-vector
+in one small linear (KKT) system ``[M B; G 0] [a; lam] = [f; v]`` (``v``: the velocity terms
+of moving ratios, else 0). Its matrix depends on the modes and the ratios only, so it is
+factored when they change and the columns of its inverse that multiply the body torques
+(and the velocity terms) are kept: every other evaluation is a small matrix-vector
 product.
 """
 
@@ -24,9 +31,13 @@ from __future__ import annotations
 from ..physics import actuator as act_
 from ..physics import thermal as th_
 from . import signals
-from .compiled import jit_inline
+from .compiled import jit, jit_inline
 from .linalg import lu_factor, lu_solve, svd_jacobi
-from .workspace import E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, IS_BAD_BODY, IS_REDUNDANT, LOCKED, STUCK, aux_offsets
+from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, IS_BAD_BODY, IS_REDUNDANT, LOCKED, STUCK, aux_offsets,
+                        fs_ratio)
+
+# columns of NetArrays.gr_lim: a moving ratio's limits and its rate limit (1/s)
+LIM_MIN, LIM_MAX, LIM_RATE = 0, 1, 2
 
 
 @jit_inline
@@ -57,6 +68,49 @@ def capacity(j, t, left, x, net, ext):
     if net.th.shape[0] > 0 and j == int(net.th[th_.CLUTCH]):
         cap *= th_.friction_factor(x, net.th)
     return cap
+
+
+@jit_inline
+def ratio(x, net, g):
+    """The ratio ``w_out / w_in`` of gear ``g``: its state if it moves, else its constant."""
+    k = net.gr_state[g]
+    return net.gr_ratio[g] if k < 0 else x[k]
+
+
+@jit_inline
+def rate_command(t, left, net, ext, g):
+    """Gear ``g``'s commanded ratio rate within its rate limit, 1/s."""
+    lim = net.gr_lim[g, LIM_RATE]
+    return min(max(signals.value(net.gr_rate_sig[g], t, left, net.sig, net.tab, ext), -lim), lim)
+
+
+@jit_inline
+def _ratio_rates(t, left, net, ext, dx, fstate):
+    """The moving ratios' rates into ``dx``: the command within the rate limit, none while held at a limit
+    (their commands into ``fstate`` for the event functions). True if the network has a moving ratio."""
+    moving = False
+    ng = net.gr_in.shape[0]
+    o = fs_ratio(net.cl_a.shape[0]) + ng
+    for g in range(ng):
+        k = net.gr_state[g]
+        if k < 0:
+            continue
+        moving = True
+        rate = rate_command(t, left, net, ext, g)
+        fstate[o + ng + g] = rate
+        dx[k] = 0.0 if fstate[o + g] != 0.0 else rate
+    return moving
+
+
+@jit_inline
+def _ratios_moved(x, net, fstate):
+    """Whether a moving ratio differs from the one the constraint factors were made with."""
+    o = fs_ratio(net.cl_a.shape[0])
+    for g in range(net.gr_in.shape[0]):
+        k = net.gr_state[g]
+        if k >= 0 and x[k] != fstate[o + g]:
+            return True
+    return False
 
 
 @jit_inline
@@ -155,7 +209,7 @@ def _clutch_torques(t, left, x, net, ext, clm, dx, aux, z):
 
 
 @jit_inline
-def _build_constraints(net, clm, grm, A, o, n):
+def _build_constraints(net, x, clm, grm, A, o, n):
     """The constraint matrix of the current modes into rows ``o .. o + n`` of ``A``."""
     nb = net.J.shape[0]
     nc = net.cl_a.shape[0]
@@ -188,27 +242,51 @@ def _build_constraints(net, clm, grm, A, o, n):
             col += 2
             continue
         c = 1.0 / net.gr_eta[g] if grm[g] > 0 else net.gr_eta[g]
+        r = ratio(x, net, g)
         A[o + i_out, col] -= 1.0
-        A[o + i_in, col] += net.gr_ratio[g] * c
+        A[o + i_in, col] += r * c
         A[o + col, i_out] = 1.0
-        A[o + col, i_in] = -net.gr_ratio[g]
+        A[o + col, i_in] = -r
         col += 1
 
 
 @jit_inline
-def _factor_constraints(net, clm, grm, A, piv, sol, G, n, istate):
-    """Build and LU-factor the constraint matrix of the current modes; keep the inverse's body-torque
-    columns in ``G``. A singular matrix (redundant locks) goes to :func:`_least_norm_constraints`.
-    False if the motion is not determined (the body in ``istate[IS_BAD_BODY]``)."""
+def _gear_row(net, clm, grm, g):
+    """The row of gear ``g``'s velocity constraint in the constraint matrix (-1: a stuck gear, whose rows hold
+    its flanges at rest and have no velocity term)."""
+    if abs(grm[g]) == STUCK:
+        return -1
+    row = net.J.shape[0]
+    for j in range(net.cl_a.shape[0]):
+        if clm[j] == LOCKED:
+            row += 1
+    for k in range(g):
+        row += 2 if abs(grm[k]) == STUCK else 1
+    return row
+
+
+@jit
+def _factor_constraints(net, x, clm, grm, A, piv, sol, G, n, istate, fstate):
+    """Build and LU-factor the constraint matrix of the current modes and ratios; keep the inverse's
+    body-torque columns in ``G`` (and, with moving ratios, the gear rows' columns after them). A singular
+    matrix (redundant locks) goes to :func:`_least_norm_constraints`. False if the motion is not
+    determined (the body in ``istate[IS_BAD_BODY]``).
+
+    Called, not inlined: it runs only when the modes or a ratio change, and inlined into every
+    evaluation of the right-hand side it made the core's compilation several times slower."""
     nb = net.J.shape[0]
-    _build_constraints(net, clm, grm, A, 0, n)
+    ng = net.gr_in.shape[0]
+    o = fs_ratio(net.cl_a.shape[0])
+    for g in range(ng):
+        fstate[o + g] = ratio(x, net, g)
+    _build_constraints(net, x, clm, grm, A, 0, n)
     scale = 0.0
     for r in range(n):
         for c in range(n):
             scale = max(scale, abs(A[r, c]))
     if not lu_factor(A, piv, n, 1e-13 * scale):
         istate[IS_REDUNDANT] = 1
-        return _least_norm_constraints(net, clm, grm, A, G, n, istate)
+        return _least_norm_constraints(net, x, clm, grm, A, G, n, istate)
     istate[IS_REDUNDANT] = 0
     for c in range(nb):
         for r in range(n):
@@ -217,6 +295,17 @@ def _factor_constraints(net, clm, grm, A, piv, sol, G, n, istate):
         lu_solve(A, piv, sol, n)
         for r in range(n):
             G[r, c] = sol[r]
+    if G.shape[1] > nb:
+        # with moving ratios: the columns that multiply the gear rows' velocity terms
+        for g in range(ng):
+            row = _gear_row(net, clm, grm, g)
+            for r in range(n):
+                sol[r] = 0.0
+            if row >= 0:
+                sol[row] = 1.0
+                lu_solve(A, piv, sol, n)
+            for r in range(n):
+                G[r, nb + g] = sol[r]
     _exact_zeros(G, n, nb)
     return True
 
@@ -237,7 +326,7 @@ def _exact_zeros(G, n, nb):
 
 
 @jit_inline
-def _least_norm_constraints(net, clm, grm, A, G, n, istate):
+def _least_norm_constraints(net, x, clm, grm, A, G, n, istate):
     """Redundant locks: the least-norm solution of the singular constraint system into ``G``.
 
     Two locks that hold the same body (parallel clutches, a brake on either side of a gear,
@@ -253,7 +342,7 @@ def _least_norm_constraints(net, clm, grm, A, G, n, istate):
     o_u = nm
     o_v = 2 * nm
     o_s = o_v + n
-    _build_constraints(net, clm, grm, A, o_u, n)
+    _build_constraints(net, x, clm, grm, A, o_u, n)
     svd_jacobi(A, o_u, o_v, n)
     s_max = 0.0
     for j in range(n):
@@ -271,26 +360,31 @@ def _least_norm_constraints(net, clm, grm, A, G, n, istate):
             if worst >= 0:
                 istate[IS_BAD_BODY] = worst
                 return False
-    for c in range(nb):
+    for c in range(G.shape[1]):
+        # body torque c, or (moving ratios) the velocity term of gear c - nb, in its row
+        src = c if c < nb else _gear_row(net, clm, grm, c - nb)
         for r in range(n):
             acc = 0.0
-            for j in range(n):
-                sj = A[o_s, j]
-                if sj > tol:
-                    acc += A[o_v + r, j] * A[o_u + c, j] / (sj * sj)
+            if src >= 0:
+                for j in range(n):
+                    sj = A[o_s, j]
+                    if sj > tol:
+                        acc += A[o_v + r, j] * A[o_u + src, j] / (sj * sj)
             G[r, c] = acc
     _exact_zeros(G, n, nb)
     return True
 
 
 @jit_inline
-def _solve_constraints(G, z, dx, nb, n, full):
+def _solve_constraints(G, z, dx, nb, n, full, vel, nv):
     """Accelerations into ``dx`` (skipped unless ``full``) and constraint torques into ``z[nb:n]``
-    (the right-hand side is zero there)."""
+    (the right-hand side there: the velocity terms ``vel`` of the first ``nv`` gears, none if 0)."""
     for r in range(0 if full else nb, n):
         acc = 0.0
         for c in range(nb):
             acc += G[r, c] * z[c]
+        for g in range(nv):
+            acc += G[r, nb + g] * vel[g]
         if r < nb:
             dx[r] = acc
         else:
@@ -320,7 +414,7 @@ def _constraint_torques(x, net, clm, grm, z, aux):
             continue
         c = 1.0 / net.gr_eta[g] if grm[g] > 0 else net.gr_eta[g]
         p_gear += lam * x[net.gr_out[g]] * (c - 1.0)
-        aux[o_gear_in + g] = -net.gr_ratio[g] * c * lam
+        aux[o_gear_in + g] = -ratio(x, net, g) * c * lam
         col += 1
     return p_gear
 
@@ -352,10 +446,18 @@ def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
     for g in range(ng):
         if abs(grm[g]) == STUCK:
             n += 1
-    if refactor:
-        if not _factor_constraints(net, clm, grm, ws.A, ws.piv, ws.sol, ws.G, n, ws.istate):
+    moving = _ratio_rates(t, left, net, ext, dx, ws.fstate)
+    if refactor or (moving and _ratios_moved(x, net, ws.fstate)):
+        if not _factor_constraints(net, x, clm, grm, ws.A, ws.piv, ws.sol, ws.G, n, ws.istate, ws.fstate):
             return False
-    _solve_constraints(ws.G, z, dx, nb, n, full)
+    nv = 0
+    if moving:
+        # the velocity terms r' w_in of the gear rows (in the free scratch ``sol``)
+        nv = ng
+        for g in range(ng):
+            k = net.gr_state[g]
+            ws.sol[g] = dx[k] * x[net.gr_in[g]] if k >= 0 and abs(grm[g]) != STUCK else 0.0
+    _solve_constraints(ws.G, z, dx, nb, n, full, ws.sol, nv)
     p_gear = _constraint_torques(x, net, clm, grm, z, aux)
     dx[e0 + nc + E_DRAG] = p_drag
     dx[e0 + nc + E_DAMPER] = p_damp
@@ -365,7 +467,7 @@ def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
 
 
 @jit_inline
-def hold_margins(aux, net, grm, k):
+def hold_margins(aux, x, net, grm, k):
     """A stuck gear holds while the input torque, seen at the output (``q``), has the
     sign ``s`` of the held torque and ``eta |lam| <= |q| <= |lam| / eta``."""
     nc = net.cl_a.shape[0]
@@ -373,13 +475,13 @@ def hold_margins(aux, net, grm, k):
     ns = net.sp_k.shape[0]
     _, _, o_gear_out, _, o_gear_in = aux_offsets(nc, ng, ns)
     lam = aux[o_gear_out + k]
-    q = -aux[o_gear_in + k] / net.gr_ratio[k]
+    q = -aux[o_gear_in + k] / ratio(x, net, k)
     sg = 1.0 if grm[k] > 0 else -1.0
     return sg * (q - net.gr_eta[k] * lam), sg * (lam / net.gr_eta[k] - q)
 
 
 @jit_inline
-def events(x, aux, net, clm, grm, g):
+def events(x, aux, net, clm, grm, g, fstate):
     """Event functions into ``g``: each is >= 0 while the current modes are valid."""
     nc = net.cl_a.shape[0]
     for j in range(nc):
@@ -406,7 +508,18 @@ def events(x, aux, net, clm, grm, g):
     for k in range(ng):
         lam = aux[2 * nc + k]
         if abs(grm[k]) == STUCK:
-            g[2 * nc + 2 * k], g[2 * nc + 2 * k + 1] = hold_margins(aux, net, grm, k)
+            g[2 * nc + 2 * k], g[2 * nc + 2 * k + 1] = hold_margins(aux, x, net, grm, k)
         else:
             g[2 * nc + 2 * k] = grm[k] * lam * x[net.gr_out[k]]
             g[2 * nc + 2 * k + 1] = 1.0
+    if g.shape[0] > 2 * nc + 2 * ng:
+        # moving ratios: each stays within its limits; held at one, its command keeps pushing beyond
+        o = fs_ratio(nc) + ng
+        for k in range(ng):
+            i = net.gr_state[k]
+            if i < 0:
+                g[2 * nc + 2 * ng + k] = 1.0
+            elif fstate[o + k] != 0.0:
+                g[2 * nc + 2 * ng + k] = fstate[o + k] * fstate[o + ng + k]
+            else:
+                g[2 * nc + 2 * ng + k] = min(x[i] - net.gr_lim[k, LIM_MIN], net.gr_lim[k, LIM_MAX] - x[i])

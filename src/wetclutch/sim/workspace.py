@@ -7,7 +7,8 @@ torques (``aux``) and of the state vector's energy accumulators, and
 
 State vector ``x``: body speeds (nb), spring deflections (ns), the energy accumulators
 (the dissipation of each clutch (nc), then :data:`N_ENERGY_EXTRA` more: drag, damper and
-gear losses and the work of the sources), then the actuator's states, if any.
+gear losses and the work of the sources), then the actuator's states, if any, the heated
+pack's, if any, and the ratios of the gears whose ratio moves (a CVT shifting), if any.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ FS_PWM_START = 4  # start of the current PWM period
 FS_PWM_H = 5  # + level (0 or 1): the first step after the last edge to that level (0: none yet)
 FS_LOCKS = 7  # + 2 j + LOCK_FIRST / LOCK_LAST: first and last time clutch j locked (-1: never)
 LOCK_FIRST, LOCK_LAST = 0, 1
-N_FSTATE = FS_LOCKS  # without the lock times, which follow, two per clutch
+N_FSTATE = FS_LOCKS  # without the lock times, which follow, two per clutch, and the gears' slots (fs_ratio)
 
 # istate: the integer part
 IS_SETTLE = 0  # modes must be re-decided before the next step
@@ -66,6 +67,20 @@ def aux_offsets(nc, ng, ns):
     return 0, nc, 2 * nc, 2 * nc + ng, 2 * nc + ng + ns
 
 
+@jit_inline
+def fs_ratio(nc):
+    """Start of the gears' slots in ``fstate``, ``ng`` each, after the lock times: the ratios the constraint
+    factors were made with (+ g), whether a moving ratio is held at its least (-1) or greatest (+1) value
+    while its command pushes beyond (+ ng + g: a mode, decided at restarts), and the latest commanded rate
+    (+ 2 ng + g, for its event function)."""
+    return FS_LOCKS + 2 * nc
+
+
+def moving_gears(net) -> int:
+    """Number of gears of the compiled network ``net`` whose ratio moves (a state)."""
+    return int(np.count_nonzero(net.gr_state >= 0))
+
+
 def aux_size(nc: int, ng: int, ns: int) -> int:
     return 2 * nc + 2 * ng + ns
 
@@ -80,7 +95,7 @@ class Workspace(NamedTuple):
     x: np.ndarray  # current state
     clm: np.ndarray  # clutch modes
     grm: np.ndarray  # gear modes (+1 forward, -1 backward, +-STUCK held at standstill)
-    fstate: np.ndarray  # (N_FSTATE + 2 nc,) see FS_*
+    fstate: np.ndarray  # (N_FSTATE + 2 nc + 3 ng,) see FS_* and fs_ratio
     istate: np.ndarray  # (N_ISTATE,) see IS_*
     K: np.ndarray  # (7, nx) stages
     dx: np.ndarray
@@ -93,7 +108,8 @@ class Workspace(NamedTuple):
     z: np.ndarray
     piv: np.ndarray
     sol: np.ndarray  # (nmat,) scratch: one column of the inverse constraint matrix
-    G: np.ndarray  # (nmat, nb) torque-to-solution columns of the inverse constraint matrix
+    G: np.ndarray  # (nmat, nb) torque-to-solution columns of the inverse constraint matrix; with moving ratios
+    # (nmat, nb + ng): then also the columns of the gears' rows, which carry their velocity terms
     y_new: np.ndarray
     y_tmp: np.ndarray
     bw: np.ndarray  # (7,) dense-output weights
@@ -114,10 +130,13 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
     ns = net.sp_k.size
     nmat = nb + nc + 2 * ng
     naux = aux_size(nc, ng, ns)
-    fstate = np.zeros(N_FSTATE + 2 * nc)
+    # a moving ratio adds an event function (its limits) and a velocity-term column per gear
+    n_mov = ng if moving_gears(net) else 0
+    fstate = np.zeros(N_FSTATE + 2 * nc + 3 * ng)
     fstate[FS_T], fstate[FS_H], fstate[FS_LOG_ERR] = t0, h0, np.log(1e-4)
     fstate[FS_PWM_NEXT], fstate[FS_PWM_START] = -np.inf, t0
-    fstate[FS_LOCKS:] = -1.0
+    fstate[FS_LOCKS:FS_LOCKS + 2 * nc] = -1.0
+    fstate[FS_LOCKS + 2 * nc:FS_LOCKS + 2 * nc + ng] = np.nan  # no factors made yet
     istate = np.zeros(N_ISTATE, dtype=np.int64)
     istate[IS_SETTLE], istate[IS_LAST_EVENT], istate[IS_BAD_BODY] = 1, -1, -1
     return Workspace(
@@ -130,13 +149,13 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
         dx=np.zeros(nx),
         aux=np.zeros(max(naux, 1)),
         aux_new=np.zeros(max(naux, 1)),
-        g_old=np.zeros(max(2 * nc + 2 * ng, 1)),
-        g_new=np.zeros(max(2 * nc + 2 * ng, 1)),
+        g_old=np.zeros(max(2 * nc + 2 * ng + n_mov, 1)),
+        g_new=np.zeros(max(2 * nc + 2 * ng + n_mov, 1)),
         A=np.zeros((3 * max(nmat, 1) + 1, max(nmat, 1))),
         z=np.zeros(max(nmat, 1)),
         piv=np.zeros(max(nmat, 1), dtype=np.int64),
         sol=np.zeros(max(nmat, 1)),
-        G=np.zeros((max(nmat, 1), max(nb, 1))),
+        G=np.zeros((max(nmat, 1), max(nb + n_mov, 1))),
         y_new=np.zeros(nx),
         y_tmp=np.zeros(nx),
         bw=np.zeros(7),
