@@ -34,7 +34,7 @@ from ..sim.integrator import advance
 from ..sim.network import Trajectory, failure, outputs
 from ..sim.rhs import ratio, spring_torque
 from ..sim.signals import External
-from ..sim.workspace import IS_SETTLE, LOCKED, OK, new_workspace
+from ..sim.workspace import IS_REJECTED, IS_SETTLE, IS_STEPS, LOCKED, OK, new_workspace
 from . import controller as control
 from . import design as design_
 from . import metrics, ratio_hold
@@ -49,6 +49,10 @@ N_CH = len(control.MEASURED)
 #: where the loop finds the measured quantities: state indices (pressure, speeds), the axle spring and the CVT
 #: gear, in the slots of the controller's measured channels (the oil temperature is a constant of the run)
 N_PROBE = N_CH - 1
+#: integration steps (accepted and rejected) a launch may take: a launch takes some 40 thousand; a plant that makes
+#: the engine crawl (a valve stem or clutch chattering between stick and slip) ends as a failed launch, not a hang
+MAX_STEPS = 3_000_000
+ERR_STEPS = -1
 
 
 def _probe(rn: clutch.RigNetwork) -> np.ndarray:
@@ -99,6 +103,8 @@ def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, ho
         status = advance(net, ext, ws, (k + 1) * dt, dt, 0.0, 1e-6, 1e-9, np.inf, out_t, out_x, out_aux, out_mode)
         if status != OK:
             return status, k
+        if ws.istate[IS_STEPS] + ws.istate[IS_REJECTED] > MAX_STEPS:
+            return ERR_STEPS, k
         if ws.clm[0] == LOCKED:
             if t_lock < 0.0:
                 t_lock = (k + 1) * dt
@@ -253,6 +259,9 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     t_after = cond.t_after + (cond.hold_time if cond.post_sync_hold else 0.0)
     status, m = _closed_loop(net, ext, ws, 0, probe, temp, sensors, noise, ctrl, cs, hold, hs, t_ref, cond.dt,
                              t_after, *out, out_meas, out_u)
+    if status == ERR_STEPS:
+        raise SimulationError(f"launch simulation stopped at {m * cond.dt:.3f} s: more than {MAX_STEPS} integration "
+                              "steps (the plant chatters between stick and slip)")
     if status != OK:
         raise SimulationError(f"launch simulation failed: {failure(rn.network, ws, status)}")
     tr = Trajectory.from_run(rn.network, ws, *out, m)
