@@ -96,8 +96,5 @@ def test_the_friction_curve_falling_with_slip_is_judder_the_loop_cannot_damp():
     plant = Params().model_copy(deep=True)
     plant.driveline.ratio, plant.friction.mu_slope = 0.4, 1.5
     g = margins.driveline(plant, 200.0)
-    f = plant.friction
-    coef = np.polyder(np.array(f.mu_slip_poly) * 1.5)
-    assert float(coef[0] * 150.0 + coef[1]) < 0.0  # the slope itself, from the study's polynomial
     assert float(np.real(g.poles()).max()) > 0.0
     assert float(np.real(margins.driveline(Params(), 100.0).poles()).max()) < 0.0
