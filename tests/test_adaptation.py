@@ -3,7 +3,7 @@
 import pytest
 
 from wetclutch.errors import WetclutchError
-from wetclutch.launch import adaptation, design, loop
+from wetclutch.launch import adaptation, design, loop, metrics
 from wetclutch.params import Params, load
 from wetclutch.physics import actuator
 
@@ -25,6 +25,24 @@ def test_a_drifted_kiss_point_is_found_and_learnt(shift, temp):
     assert runs[-1].adaptation.launches[adaptation.band(temp)] == 3
 
 
+def test_a_kiss_point_found_in_a_pressure_slam_is_pulled_down_by_the_creep_it_causes():
+    # hot oil; the clutch's kiss point lies 0.15 bar below the design's and its stroke is shorter, so the full-input
+    # fill reaches the plates and slams the pressure: the torque onset then comes at a pressure some 0.2 bar above
+    # the contact, and holding there would push the waiting vehicle with 20-25 N m unless the hold watches the creep
+    p = Params().hydraulics
+    plant = load(overrides={"hydraulics.p_prestress": p.p_prestress - 0.11e5, "hydraulics.x_contact": 0.825 * p.x_contact})
+    true = actuator.contact_pressure(plant)
+    d = design.cached(Params(), "launch")
+    runs = loop.sequence(plant, d, loop.Conditions(t_ref=100.0, oil_temp_C=97.0), 2)
+    for r in runs:
+        assert r.kiss_found_Pa == pytest.approx(true, abs=0.05e5)
+        assert r.summary["creep_Nm"] <= metrics.REQ_CREEP_NM
+    # without the watch (a creep limit no clutch reaches) the found kiss point stays high and the vehicle creeps
+    blind = loop.sequence(plant, design.with_settings(d, creep_limit=1e3), loop.Conditions(t_ref=100.0, oil_temp_C=97.0), 1)
+    assert blind[0].kiss_found_Pa > true + 0.1e5
+    assert blind[0].summary["creep_Nm"] > metrics.REQ_CREEP_NM
+
+
 @pytest.mark.parametrize("scale", [0.8, 1.2])
 def test_a_friction_level_off_the_design_is_learnt_and_the_next_launch_starts_from_it(scale):
     # the controller is designed on the defaults; the clutch's friction is 20 % lower or higher. The estimate is the
@@ -37,8 +55,12 @@ def test_a_friction_level_off_the_design_is_learnt_and_the_next_launch_starts_fr
     assert runs[1].summary["friction_factor_start"] == pytest.approx(runs[0].summary["friction_factor_found"])
     learnt = runs[-1].adaptation.friction_factor(60.0)
     assert learnt == pytest.approx(scale, rel=0.1)
-    # started from what was learnt, the response no longer waits for the estimate to converge
-    assert runs[-1].summary["t95_settled_s"] <= runs[0].summary["t95_settled_s"] + 0.01
+    # started from what was learnt, the response meets the requirement and stays within the robustness tolerance
+    # of the first launch (on the stronger clutch the first is the quicker one: its nominal friction law asks for
+    # 20 % more pressure than needed until the estimate has converged, and the learnt factor takes that push away)
+    assert runs[-1].summary["t95_settled_s"] < metrics.REQ_T95_S
+    assert runs[-1].summary["t95_settled_s"] <= runs[0].summary["t95_settled_s"] + metrics.ROBUST_DT95
+    assert runs[-1].summary["overshoot_pct"] <= runs[0].summary["overshoot_pct"] + metrics.ROBUST_OVERSHOOT
 
 
 def test_adaptation_state_round_trips_and_bad_files_name_the_field(tmp_path):

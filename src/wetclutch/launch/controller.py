@@ -28,6 +28,15 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       identification (``wetclutch identify`` estimates it as the pressure at
       torque onset) or the parameter set; ``hold_offset`` covers a kiss-point
       error of that size.
+    * **Creep watch in the hold.** What the waiting vehicle feels is measured: the
+      filtered ``T_r``. Torque above the open plates' drag (the least torque seen
+      since the fill) beyond ``creep_limit`` at a calm hold pressure means the kiss
+      point is believed too high (found in a pressure slam, or learnt on a warmer
+      clutch): the belief moves down to the kiss point that torque explains. A
+      pressure trapped above the hold (cold oil, a stiffly damped stem stuck in its
+      overlap) drains only once the magnet's force falls, after the input has crossed
+      the whole play: the pressure loop then works on the falling branch of the map,
+      and ``trapped_dip`` below it while the creep exceeds ``creep_limit``.
     * **Feedforward through the inverse static map.** The torque request is
       turned into a pressure through the nominal friction law
       (``T_c = T_r i / eta``, ``F_n = T_c / mu(slip)``, ``p = p_kiss + F_n / A_p``)
@@ -106,10 +115,11 @@ LAUNCH, BASELINE = 0, 1
 # launch controller
 (P_KISS, HOLD_OFFSET, FILL_EXIT, A_P, RATIO, ETA, MU2, MU1, MU0, F_KNEE, KP_P, KI_P, KP_T, KI_T, P_MAX, TAU_REF,
  HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, HOLD_LEAD, FILL_EXIT_COLD, FF_T0, FF_DT,
- FF_NT, FF_P0, FF_DP, FF_NP, KI_HOLD, DITHER_AMP_T, DITHER_HALF_T, FF_SHIFT_T, REQ_LEAD, KD_P) = range(4, 42)
+ FF_NT, FF_P0, FF_DP, FF_NP, KI_HOLD, DITHER_AMP_T, DITHER_HALF_T, FF_SHIFT_T, REQ_LEAD, KD_P, CREEP_LIMIT,
+ VALVE_PLAY, TRAPPED_DIP) = range(4, 45)
 # baseline: its PI gains (V/N m, V/(N m s)) and the fill time (s) at each feedforward temperature
-KP_B, KI_B = 42, 43
-FILL_T = 44
+KP_B, KI_B = 45, 46
+FILL_T = 47
 N_FILL_T = 5
 FF_TABLE = FILL_T + N_FILL_T  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
 N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power first
@@ -117,8 +127,8 @@ N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power 
 # --- controller state
 (CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED, CS_KISS,
  CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF, CS_THETA_START, CS_THETA_N, CS_THETA_LEARNT, CS_DPF,
- CS_PPREV) = range(24)
-N_CS = 24
+ CS_PPREV, CS_TMIN) = range(25)
+N_CS = 25
 #: time constant of the filtered derivative of the measured pressure (s): it passes the valve's own pressure
 #: oscillation (20 to 40 Hz) and smooths the sensor's noise
 TAU_DP = 0.002
@@ -147,6 +157,11 @@ SEARCH_LEAD = 0.1e5
 #: a jump of the filtered pressure this far above the hold pressure in the hold: the plates have stopped the
 #: piston and the valve, open for the stroke's flow, has trapped the pressure high (Pa)
 CONTACT_JUMP = 0.1e5
+#: time constant (s) with which a steady creep pulls the believed kiss point down to the one it shows
+TAU_CREEP_KISS = 0.1
+#: the hold's pressure this far (Pa) above its set point is trapped: the stem sits in its overlap and the magnet
+#: on its rising branch, and the drain opens only once the input has crossed the play
+TRAPPED = 0.05e5
 FILL, HOLD, TORQUE, LOCKUP = 0, 1, 2, 3
 SYNC_SLIP = 2.0  # rad/s: measured slip below which the clutch counts as synchronised
 
@@ -187,6 +202,14 @@ def _pressure_target(ctrl, kiss, t_ref, slip, theta, ratio):
     t_c = max(t_ref, 0.0) * ratio / ctrl[ETA]
     f_n = friction.force_for(t_c / mu, ctrl[F_KNEE])
     return kiss + f_n / ctrl[A_P]
+
+
+@_inline
+def _kiss_under(ctrl, meas, p, torque):
+    """The kiss point that explains axle torque ``torque`` at pressure ``p`` under the nominal friction law."""
+    ratio = _ratio(ctrl, meas)
+    slip = meas[M_WP] - meas[M_WS] / ratio
+    return p - _pressure_target(ctrl, 0.0, torque, slip, 1.0, ratio)
 
 
 @_inline
@@ -266,14 +289,20 @@ def _pressure_loop(ctrl, cs, p_set, p, temp, hold, dt):
     # with the torque dither wider than the magnet's play the iron follows the mean
     # current, not the rising branch the map was measured on: shift the map by the play
     shift = 0.0 if hold else ctrl[FF_SHIFT_T]
+    trapped = hold and cs[CS_PF5] > p_set + TRAPPED
+    if trapped:
+        # a pressure trapped above the hold (cold oil: the stem stuck in its overlap) drains only once the
+        # magnet's force falls, after the input has crossed the whole play: work on the falling branch, and
+        # below it while the waiting vehicle is pushed too hard (the stem's friction holds it otherwise)
+        shift = ctrl[VALVE_PLAY] + (ctrl[TRAPPED_DIP] if cs[CS_TF] > ctrl[CREEP_LIMIT] else 0.0)
     # the valve regulates the pressure through a slow (damped) stem and the clutch volume, an integrator: the
     # lag of a stiffly damped stem leaves that loop underdamped, and feedback of the pressure's rate damps it
     damp = 0.0 if hold else ctrl[KD_P] * cs[CS_DPF]
     u = _table(ctrl, temp, p_set) - shift + cs[CS_ZP] + kp * e_p - damp
-    if hold and cs[CS_PF] < cs[CS_KISS]:
-        # the piston still strokes: the flow it takes makes the pressure droop below the
-        # valve's static equilibrium, and an integrator wound up against that droop slams
-        # the pressure up when the plates stop the piston
+    if trapped or (hold and cs[CS_PF] < cs[CS_KISS]):
+        # no integration: a trapped pressure's error is the play's, not the map's; and while the piston
+        # still strokes, the flow it takes makes the pressure droop below the valve's static equilibrium,
+        # and an integrator wound up against that droop slams the pressure up when the plates stop the piston
         ki = 0.0
     if u > ctrl[U_MAX]:
         u = ctrl[U_MAX]
@@ -324,12 +353,23 @@ def _find_kiss(ctrl, cs, meas, t_ref, phase, dt):
         cs[CS_KISS] = cs[CS_PF] - JUMP / 3.0
         cs[CS_FOUND] = 1.0
     elif phase != FILL and cs[CS_TF] - cs[CS_TREF] > ONSET_NM:
-        ratio = _ratio(ctrl, meas)
-        slip = meas[M_WP] - meas[M_WS] / ratio
-        cs[CS_KISS] = cs[CS_PF] - _pressure_target(ctrl, 0.0, ONSET_NM, slip, 1.0, ratio)
+        cs[CS_KISS] = _kiss_under(ctrl, meas, cs[CS_PF], ONSET_NM)
         cs[CS_FOUND] = 1.0
     elif phase == HOLD and t_ref <= 0.0 and cs[CS_DIP] <= 0.0 and cs[CS_PF] > cs[CS_KISS] - SEARCH_LEAD:
         cs[CS_KISS] = min(cs[CS_KISS] + SEARCH_RATE * dt, ctrl[P_KISS] + SEARCH_SPAN)
+
+
+@_inline
+def _watch_creep(ctrl, cs, meas, dt):
+    """A kiss point believed too high (found in a pressure slam, or learnt on a warmer clutch) shows as creep at
+    a calm hold pressure: the belief moves down to the kiss point that the torque above the open plates' drag
+    (the least torque seen since the fill) explains, once that torque exceeds ``creep_limit``."""
+    cs[CS_TMIN] = min(cs[CS_TMIN], cs[CS_TF])
+    excess = cs[CS_TF] - cs[CS_TMIN]
+    if excess > ctrl[CREEP_LIMIT] and abs(cs[CS_PF5] - cs[CS_PF]) < ARM_RISE:
+        seen = _kiss_under(ctrl, meas, cs[CS_PF], excess)
+        if seen < cs[CS_KISS]:
+            cs[CS_KISS] += (seen - cs[CS_KISS]) * dt / (TAU_CREEP_KISS + dt)
 
 
 @_jit
@@ -348,6 +388,8 @@ def _launch(ctrl, cs, meas, t_ref):
     cs[CS_DPF] += (rate - cs[CS_DPF]) * dt / (TAU_DP + dt)
     cs[CS_PPREV] = p
     _find_kiss(ctrl, cs, meas, t_ref, phase, dt)
+    if phase == HOLD and t_ref <= 0.0 and cs[CS_DIP] <= 0.0 and cs[CS_FOUND] != 0.0:
+        _watch_creep(ctrl, cs, meas, dt)
     p_hold = cs[CS_KISS] + ctrl[HOLD_OFFSET]
     if phase == FILL:
         if p < cs[CS_KISS] - _fill_exit(ctrl, temp):
@@ -359,6 +401,7 @@ def _launch(ctrl, cs, meas, t_ref):
         cs[CS_PSET] = p
         cs[CS_DIP] = ctrl[DIP_N]
         cs[CS_TREF] = cs[CS_TF]
+        cs[CS_TMIN] = cs[CS_TF]
     if phase == HOLD and cs[CS_DUMPED] == 0.0 and t_ref <= 0.0 and cs[CS_PF] > p_hold + CONTACT_JUMP:
         # contact: the stem sits in its overlap with the pressure trapped above the hold and only
         # the seal leakage would bring it down (creep on the waiting vehicle); dip the input
@@ -485,7 +528,8 @@ def pack(kind: str, s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pres
              DITHER_AMP: "dither_amp", DITHER_HALF: "dither_half", KP_HOLD: "kp_hold", DIP: "dip", DIP_N: "dip_n",
              HOLD_LEAD: "hold_lead", FILL_EXIT_COLD: "fill_exit_cold", KI_HOLD: "ki_hold",
              DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque", FF_SHIFT_T: "ff_shift",
-             REQ_LEAD: "req_lead", KD_P: "kd_p"}
+             REQ_LEAD: "req_lead", KD_P: "kd_p", CREEP_LIMIT: "creep_limit", VALVE_PLAY: "valve_play",
+             TRAPPED_DIP: "trapped_dip"}
     baseline = {P_KISS: "p_kiss", HOLD_OFFSET: "hold_offset", DIP: "dip", DIP_N: "dip_n", KP_B: "kp", KI_B: "ki",
                 DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque"}
     for slot, name in (launch if kind == "launch" else baseline).items():

@@ -58,6 +58,7 @@ LAUNCH_DEFAULTS = {
     "req_lead": 0.2e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kd_p": 1.0e-8, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
     "ki_t": 3.9, "tau_ref": 0.034, "tau_theta": 0.05, "theta0": 1.0, "dither_amp": 0.05, "dither_hz": 125.0,
     "dither_amp_torque": 0.3, "dither_hz_torque": 125.0, "ff_shift_torque": 1.0, "dip": 0.5, "dip_time": 0.015,
+    "creep_limit": 10.0, "trapped_dip": 0.2,
 }
 #: the defaults that came from ``wetclutch tune`` on the default rig (CMA-ES, 40 training plants of the shipped
 #: ranges, seed 0, 6 generations of 8), rounded; ``tau_theta`` from the launch loop's margins
@@ -106,6 +107,8 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "ff_shift_torque": Setting("-", 0.0, 5.0, "share of the valve play taken off the feedforward under dither"),
         "dip": Setting("V", 0.0, 5.0, "input dip after the fill (onto the magnet's rising branch)"),
         "dip_time": Setting("s", 0.0, 1.0, "length of the dip"),
+        "creep_limit": Setting("N m", 0.0, 1e3, "creep (axle torque) above which the waiting clutch lowers its hold"),
+        "trapped_dip": Setting("V", 0.0, 5.0, "input taken off beyond the magnet's play while the hold's pressure is trapped high"),
     },
     "baseline": {
         "p_kiss": _PLANT["p_kiss"],
