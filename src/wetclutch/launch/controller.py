@@ -127,8 +127,8 @@ N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power 
 # --- controller state
 (CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED, CS_KISS,
  CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF, CS_THETA_START, CS_THETA_N, CS_THETA_LEARNT, CS_DPF,
- CS_PPREV, CS_TMIN) = range(25)
-N_CS = 25
+ CS_PPREV, CS_TMIN, CS_REF1) = range(26)
+N_CS = 26
 #: time constant of the filtered derivative of the measured pressure (s): it passes the valve's own pressure
 #: oscillation (20 to 40 Hz) and smooths the sensor's noise
 TAU_DP = 0.002
@@ -252,9 +252,11 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     gated = cs[CS_FILLED] == 0.0 and cs[CS_PF] < p_hold
     if not gated:
         cs[CS_FILLED] = 1.0
-        # the request through a first-order prefilter: a torque step through the valve's
-        # fast, underdamped pressure response would jolt the driveline
-        cs[CS_REF] += (t_ref - cs[CS_REF]) * dt / (ctrl[TAU_REF] + dt)
+        # the request through a critically damped prefilter (two first-order stages): a torque step
+        # through the valve's fast, underdamped pressure response would jolt the driveline, and the
+        # second stage starts the request with zero slope, which a stiffly damped stem can follow
+        cs[CS_REF1] += (t_ref - cs[CS_REF1]) * dt / (ctrl[TAU_REF] + dt)
+        cs[CS_REF] += (cs[CS_REF1] - cs[CS_REF]) * dt / (ctrl[TAU_REF] + dt)
     r = cs[CS_REF]
     e_t = r - meas[M_TR]
     # slip from the secondary flywheel, not from omega_1: the light CVT input shakes
@@ -422,6 +424,7 @@ def _launch(ctrl, cs, meas, t_ref):
     if phase == HOLD and t_ref > 0.0:
         phase = TORQUE
         cs[CS_REF] = 0.0
+        cs[CS_REF1] = 0.0
         # the friction factor learnt on earlier launches at this temperature, if any (the loop sets it)
         cs[CS_THETA] = cs[CS_THETA_START] if cs[CS_THETA_START] > 0.0 else ctrl[THETA0]
     if phase == TORQUE and abs(meas[M_WP] - meas[M_W1]) < SYNC_SLIP and meas[M_W1] > 0.0:

@@ -56,14 +56,15 @@ _P = (0.0, 5e6)
 LAUNCH_DEFAULTS = {
     "hold_offset": 0.02e5, "fill_exit": 0.1e5, "fill_exit_cold": 0.05e5, "hold_rate": 1.0e5, "hold_lead": 0.01e5,
     "req_lead": 0.2e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kd_p": 1.0e-8, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
-    "ki_t": 3.9, "tau_ref": 0.034, "tau_theta": 0.05, "theta0": 1.0, "dither_amp": 0.05, "dither_hz": 125.0,
+    "ki_t": 3.9, "tau_ref": 0.03, "tau_theta": 0.05, "theta0": 1.0, "dither_amp": 0.05, "dither_hz": 125.0,
     "dither_amp_torque": 0.3, "dither_hz_torque": 125.0, "ff_shift_torque": 1.0, "dip": 0.5, "dip_time": 0.015,
     "creep_limit": 10.0, "trapped_dip": 0.2,
 }
 #: the defaults that came from ``wetclutch tune`` on the default rig (CMA-ES, 40 training plants of the shipped
 #: ranges, seed 0, 6 generations of 8), rounded; ``tau_theta`` from the launch loop's margins
-#: (:mod:`wetclutch.launch.margins`) and a sweep, ``kd_p`` from a sweep; the rest were set by hand on the default rig
-TUNED = ("kp_p", "ki_p", "ki_t", "tau_ref")
+#: (:mod:`wetclutch.launch.margins`) and a sweep, ``kd_p`` and ``tau_ref`` from sweeps (600 plants of the shipped
+#: ranges, three seeds, three launches each); the rest were set by hand on the default rig
+TUNED = ("kp_p", "ki_p", "ki_t")
 #: the baseline's settings that are not derived from the plant
 BASELINE_DEFAULTS = {"hold_offset": 0.05e5, "dip": 0.5, "dip_time": 0.015, "dither_amp_torque": 0.3,
                      "dither_hz_torque": 125.0}
@@ -97,7 +98,7 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "ki_hold": Setting("V/(Pa s)", 0.0, 1.0, "pressure loop, integral gain, in the hold"),
         "kp_t": Setting("-", 0.0, 100.0, "torque loop, proportional gain (per nominal pressure per N m)"),
         "ki_t": Setting("1/s", 0.0, 1e4, "torque loop, integral gain (per nominal pressure per N m)"),
-        "tau_ref": Setting("s", 0.0, 10.0, "time constant of the request prefilter"),
+        "tau_ref": Setting("s", 0.0, 10.0, "time constant of each of the request prefilter's two stages"),
         "tau_theta": Setting("s", 0.0, 10.0, "time constant of the friction-factor estimate"),
         "theta0": Setting("-", 0.1, 10.0, "friction factor assumed until it is measured"),
         "dither_amp": Setting("V", 0.0, 5.0, "dither amplitude before the request"),
