@@ -34,15 +34,20 @@ def test_the_design_takes_the_plants_kiss_point_ratio_and_friction(plant):
     assert "identified" in d.sources["p_kiss"] and "default" in d.sources["p_kiss"]
 
 
-def test_friction_curve_slope_turns_about_the_reference_slip():
+def test_friction_curve_slope_keeps_the_mean_over_the_slip_span():
     poly = [-1.7e-6, 2.7e-4, 2.6e-2]
-    for slope in (0.5, 1.0, 1.5):
-        c = friction.curve(poly, 1.2, slope, 75.0)
-        assert np.polyval(c, 75.0) == pytest.approx(1.2 * np.polyval(poly, 75.0))
+    w = np.linspace(0.0, 150.0, 30001)
+    for slope in (0.0, 0.5, 1.0, 2.0):
+        c = friction.curve(poly, 1.2, slope, 150.0)
+        # the mean friction over the launch's slip (trapezoidal quadrature) is the level alone
+        assert np.trapezoid(np.polyval(c, w), w) / 150.0 == pytest.approx(
+            1.2 * np.trapezoid(np.polyval(poly, w), w) / 150.0, rel=1e-9)
         # the change of mu with slip scales with the slope
         assert np.polyval(c, 150.0) - np.polyval(c, 0.0) == pytest.approx(
             1.2 * slope * (np.polyval(poly, 150.0) - np.polyval(poly, 0.0)))
-    np.testing.assert_array_equal(friction.curve(poly, 1.0, 1.0, 75.0), np.array(poly))
+    # no slope: a flat curve at the mean (about 0.0335 for the study's fit)
+    assert friction.curve(poly, 1.0, 0.0, 150.0)[-1] == pytest.approx(0.0335, abs=1e-4)
+    np.testing.assert_array_equal(friction.curve(poly, 1.0, 1.0, 150.0), np.array(poly))
 
 
 def test_two_point_fit_recovers_a_first_order_plus_dead_time_step():

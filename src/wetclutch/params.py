@@ -193,7 +193,7 @@ class Hydraulics(_Section):
 
 
 class Friction(_Section):
-    """Plate friction: T_max = mu(slip) * mu_scale * F_n * F_n / (F_n + F_knee), mu turned by mu_slope about mu_slip_ref."""
+    """Plate friction: T_max = mu(slip) * mu_scale * F_n * F_n / (F_n + F_knee), mu turned by mu_slope about its mean over 0..mu_slip_span."""
 
     mu_slip_poly: list[float] = Field(
         [-1.7e-6, 2.7e-4, 2.6e-2],
@@ -203,9 +203,9 @@ class Friction(_Section):
         max_length=8,
     )
     mu_scale: float = _f(1.0, "-", "multiplier on mu (unit-to-unit and condition spread)", gt=0.0, le=10.0)
-    mu_slope: float = _f(1.0, "-", "multiplier on mu's change with slip about its value at mu_slip_ref (curve steepness)",
+    mu_slope: float = _f(1.0, "-", "multiplier on mu's change with slip about its mean over 0..mu_slip_span (curve steepness)",
                          ge=0.0, le=10.0)
-    mu_slip_ref: float = _f(75.0, "rad/s", "slip about which mu_slope turns the curve (its value there is kept)",
+    mu_slip_span: float = _f(150.0, "rad/s", "slip range (from 0) over which mu_slope keeps the mean of mu (a launch's slip)",
                             ge=0.0, le=1e3)
     F_knee: float = _f(100.0, "N", "normal force below which friction drops (plates barely pressed)", ge=0.0, le=1e5)
     drag_20C: float = _f(0.013, "N m s", "open-clutch viscous drag coefficient at 20 C (scales with viscosity)", ge=0.0, le=10.0)

@@ -262,7 +262,7 @@ def torque_step(params: Params, table: np.ndarray, fill: np.ndarray, hold_offset
     """
     p_kiss = actuator.contact_pressure(params)
     f = params.friction
-    mu = float(np.polyval(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_ref), 100.0))
+    mu = float(np.polyval(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_span), 100.0))
     d = params.driveline
     t_c = TUNE_TORQUE * d.ratio / d.eta
     f_n = friction.force_for.py_func(t_c / mu, f.F_knee)
@@ -328,7 +328,7 @@ def design(plant: Params, kind: str = "launch", origin: dict[str, str] | None = 
         raise WetclutchError(f"unknown controller '{kind}' (choose from {', '.join(KINDS)})")
     origin = origin or {}
     f, h, d, v = plant.friction, plant.hydraulics, plant.driveline, plant.valve
-    poly = np.trim_zeros(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_ref), "f")
+    poly = np.trim_zeros(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_span), "f")
     if poly.size > controller.N_MU:
         # the controller's friction law is quadratic (the study's fit); dropping terms would be silent
         raise WetclutchError(f"friction.mu_slip_poly: the launch controller takes at most a quadratic, "

@@ -95,7 +95,7 @@ def _finite(x: float | None) -> float:
 def driveline(plant: Params, t_ref: float) -> control.TransferFunction:
     """``G_dl``: axle torque over the clutch torque seen at the axle, DC gain 1 (module docstring)."""
     d, f = plant.driveline, plant.friction
-    coef = friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_ref)
+    coef = friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_span)
     slip = d.omega_p0
     mu = max(float(np.polyval(coef, slip)), 1e-4)
     dmu = float(np.polyval(np.polyder(coef), slip))

@@ -12,8 +12,9 @@ rational knee rather than ``1 - exp(-F_n/F_knee)``: the same shape to within the
 study's scatter, without a transcendental function in every evaluation.
 
 A clutch's curve differs from the study's fit in level (``mu_scale``) and in steepness
-(``mu_slope``: the change of ``mu`` with slip scaled about a reference slip, where the
-value is kept); :func:`curve` makes the polynomial the model runs on.
+(``mu_slope``: the change of ``mu`` with slip scaled about its mean over a launch's slip
+range, so that a steeper curve has the same mean friction); :func:`curve` makes the
+polynomial the model runs on.
 
 Each function is compiled for the numerical core (inlined there) and, being plain
 arithmetic, also runs on floats and numpy arrays through ``.py_func`` for
@@ -56,14 +57,19 @@ def mu(coef, slip):
     return v
 
 
-def curve(poly, scale: float = 1.0, slope: float = 1.0, slip_ref: float = 0.0) -> np.ndarray:
+def curve(poly, scale: float = 1.0, slope: float = 1.0, slip_span: float = 0.0) -> np.ndarray:
     """The ``mu(slip)`` coefficients (highest power first) of a clutch with level ``scale`` and steepness ``slope``.
 
-    ``mu'(w) = scale * (mu(w_ref) + slope * (mu(w) - mu(w_ref)))``: the slip-dependent terms are
-    multiplied by ``slope`` and the constant moved so that ``mu'(w_ref) = scale * mu(w_ref)``.
+    ``mu'(w) = scale * (m + slope * (mu(w) - m))`` with ``m`` the mean of ``mu`` over slips
+    ``0 .. slip_span`` (its value at zero slip if ``slip_span`` is 0): the slip-dependent terms are
+    multiplied by ``slope`` and the constant moved so that the mean over that span is ``scale * m``
+    whatever the steepness.
     """
     c = np.asarray(poly, dtype=float)
-    ref = float(np.polyval(c, slip_ref))
+    if slip_span > 0.0:
+        ref = float(np.polyval(np.polyint(c), slip_span)) / slip_span
+    else:
+        ref = float(c[-1])
     out = c * slope
     out[-1] += (1.0 - slope) * ref
     return out * scale

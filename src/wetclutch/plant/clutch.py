@@ -63,7 +63,7 @@ def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str =
         f = params.friction
         net = driveline.build(params, 0.0, temp_C=temp, plate_temp_C=plate_temp_C, ratio_rate=ratio_rate)
         ci = 0  # the driveline's clutch
-        net.clutches[ci].mu_poly = tuple(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_ref))
+        net.clutches[ci].mu_poly = tuple(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_span))
         # cold oil drags the open plates: viscous torque proportional to viscosity
         drag = f.drag_20C * oil.dynamic_viscosity(temp) / oil.dynamic_viscosity(20.0)
         net.spring("oil_drag", 0, 1, 0.0, drag)
