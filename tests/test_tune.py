@@ -39,6 +39,14 @@ def test_a_small_search_can_be_stopped_and_resumed(tmp_path):
     # the reported best is the tuned design's own score: verified again on the training plants it scores the same
     again = verify.run(both.design, Params(), 2, 3, 1, SMALL, corners=False, progress=False)
     assert tune.score(again) == pytest.approx(both.best_score, rel=1e-12)
+    # the tuned design is the finalist that scores best on the validation plants (seed + 1, twice as many); the
+    # start is among the finalists, so the tuned design does no worse there than the start
+    assert "start" in both.finalists and both.chosen in both.finalists
+    val = {name: tune.score(verify.run(d, Params(), 2 * 2, 4, 1, SMALL, corners=False, progress=False))
+           for name, d in (("start", start), ("tuned", both.design))}
+    assert val["tuned"] == pytest.approx(both.finalists[both.chosen][2], rel=1e-12)
+    assert val["start"] == pytest.approx(both.finalists["start"][2], rel=1e-12)
+    assert val["tuned"] <= val["start"]
     for name in tune.TUNABLE["baseline"]:
         assert start.settings[name] / tune.SPAN <= both.design.settings[name] <= start.settings[name] * tune.SPAN
         assert both.design.sources[name].startswith("tuned")
@@ -98,3 +106,25 @@ def test_the_friction_curve_falling_with_slip_is_judder_the_loop_cannot_damp():
     g = margins.driveline(plant, 200.0)
     assert float(np.real(g.poles()).max()) > 0.0
     assert float(np.real(margins.driveline(Params(), 100.0).poles()).max()) < 0.0
+
+
+def test_tune_command_writes_the_finalists_and_keeps_the_design_unless_beaten(tmp_path):
+    import json
+
+    from wetclutch.cli import main
+    from wetclutch.launch import settings
+
+    out = tmp_path / "t"
+    assert main(["tune", "--controller", "baseline", "--samples", "2", "--generations", "1", "--popsize", "2",
+                 "--heldout-samples", "2", "--sequence", "1", "--quiet", "--out", str(out)]) == 0
+    info = json.loads((out / "tune.json").read_text())
+    fin = info["finalists"]
+    assert info["chosen"] in fin and "start" in fin
+    # the chosen finalist scores best on the validation plants; the written controller is that finalist
+    assert fin[info["chosen"]]["validation_score"] == min(v["validation_score"] for v in fin.values())
+    written = settings.load(out / "controller.toml")
+    start = designs.cached(Params(), "baseline")
+    if info["chosen"] == "start":
+        assert all(written.settings[n] == pytest.approx(start.settings[n]) for n in tune.TUNABLE["baseline"])
+    assert info["pass_rates"]["training"]["tuned"] == fin[info["chosen"]]["training_pass_rate"]
+    assert "(chosen)" in (out / "tune.md").read_text()

@@ -255,8 +255,9 @@ def _cmd_tune(args: argparse.Namespace) -> None:
     verify.check_options(args.heldout_samples, args.heldout_seed, args.workers, "--heldout-samples")
     tune.check_options(args.samples, args.generations, args.popsize)
     launch.check_sequence(args.sequence)
-    if args.heldout_seed == args.seed:
-        raise WetclutchError("--heldout-seed must differ from --seed (the held-out plants must be other plants)")
+    if args.heldout_seed in (args.seed, args.seed + 1):
+        raise WetclutchError("--heldout-seed must differ from --seed and --seed + 1 (the held-out plants must be other "
+                             "than the training and the validation plants)")
     p, origin = _plant(args)
     rs = ranges.load(args.ranges)
     start = _design(args, p, origin)
@@ -269,7 +270,8 @@ def _cmd_tune(args: argparse.Namespace) -> None:
         return verify.run(design, p, n, seed, args.workers, rs, corners=False, progress=False,
                           sequence=args.sequence)["pass_rate"]
 
-    rates = {"training": {"start": rate(start, args.samples, args.seed), "tuned": rate(res.design, args.samples, args.seed)},
+    fin = res.finalists
+    rates = {"training": {"start": fin["start"][1], "tuned": fin[res.chosen][1]},
              "held-out": {"start": rate(start, args.heldout_samples, args.heldout_seed),
                           "tuned": rate(res.design, args.heldout_samples, args.heldout_seed)}}
     meta = {"samples": args.samples, "seed": args.seed, "heldout_samples": args.heldout_samples,

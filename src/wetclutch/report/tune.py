@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Any
 
 from ..launch.settings import to_toml
-from ..launch.tune import Tuning
+from ..launch.tune import VALIDATION_FACTOR, Tuning
 from ..output import atomic_dir, write_json
 
 
@@ -18,16 +18,26 @@ def write(tuning: Tuning, rates: dict[str, dict[str, float]], out: str | Path, m
         write_json(d / "tune.json", {"kind": t.design.kind, "gains": {n: {"start": t.start.settings[n],
                                                                           "tuned": t.design.settings[n]}
                                                                       for n in t.names},
-                                     "history": t.history, "pass_rates": rates, **meta})
+                                     "history": t.history, "pass_rates": rates, "chosen": t.chosen,
+                                     "finalists": {k: dict(zip(("training_score", "training_pass_rate",
+                                                                "validation_score", "validation_pass_rate"), v))
+                                                   for k, v in t.finalists.items()}, **meta})
         lines = [f"# Tuning of the {t.design.kind} controller", "",
                  f"CMA-ES over the logarithms of {', '.join(t.names)} (each within a factor 5 of the design), scored on "
                  f"{meta['samples']} training plants (seed {meta['seed']}; each launched {meta.get('sequence', 1)} times, the "
                  f"adaptation carried over, judged on the last) by (1 - pass rate) + 0.03 x the mean of the "
-                 f"worst 10 % of the samples' largest requirement violation; verified on {meta['heldout_samples']} held-out "
-                 f"plants (seed {meta['heldout_seed']}).", "",
+                 f"worst 10 % of the samples' largest requirement violation. The tuned design is the finalist (the "
+                 f"design, the best candidate on the training plants, the search's mean) that scores best on "
+                 f"{VALIDATION_FACTOR * meta['samples']} validation plants (seed {meta['seed'] + 1}): the best of many "
+                 f"noisy training scores is biased low, and the design is kept unless a candidate beats it there. "
+                 f"Verified on {meta['heldout_samples']} held-out plants (seed {meta['heldout_seed']}).", "",
                  "| pass rate, all requirements | designed | tuned |", "|---|---|---|"]
         for split in ("training", "held-out"):
             lines.append(f"| {split} | {100 * rates[split]['start']:.1f} % | {100 * rates[split]['tuned']:.1f} % |")
+        lines += ["", "| finalist | training score | training pass rate | validation score | validation pass rate |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| {k}{' (chosen)' if k == t.chosen else ''} | {v[0]:.3f} | {100 * v[1]:.1f} % | {v[2]:.3f} | "
+                  f"{100 * v[3]:.1f} % |" for k, v in t.finalists.items()]
         lines += ["", "| gain | designed | tuned |", "|---|---|---|"]
         lines += [f"| {n} | {t.start.settings[n]:.4g} | {t.design.settings[n]:.4g} |" for n in t.names]
         lines += ["", "| generation | best score | mean score | best training pass rate |", "|---|---|---|---|"]
