@@ -76,6 +76,15 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       fill completes: a jolt at contact is then only the torque arriving. The
       request itself waits until the fill is complete (latched, so that noise
       on the filtered pressure cannot stop it again).
+    * **Plates that do not answer.** Once torque is requested, the plates should
+      answer at once (the hold has them touching). Until the axle torque rises or
+      the clutch output turns, the kiss point was believed too low: the pressure
+      set point leads the measured pressure by no more than ``req_lead`` (a valve
+      opened wide for a stroke slams the pressure up when the plates stop the
+      piston) and the torque integrator waits; a torque answer well above the
+      believed kiss point corrects it for the next launch. The torque onset that
+      finds the kiss point is a rise above the open plates' drag, on which the
+      filtered axle torque settles only some 60 ms after the start of the recording.
     * **Anti-windup.** Both integrators stop when the input saturates in the
       direction that would wind them further (conditional integration), and
       the pressure target is limited to the supply pressure.
@@ -127,8 +136,8 @@ N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power 
 # --- controller state
 (CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED, CS_KISS,
  CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF, CS_THETA_START, CS_THETA_N, CS_THETA_LEARNT, CS_DPF,
- CS_PPREV, CS_TMIN, CS_REF1) = range(26)
-N_CS = 26
+ CS_PPREV, CS_TMIN, CS_REF1, CS_ANSWERED, CS_TREQ) = range(28)
+N_CS = 28
 #: time constant of the filtered derivative of the measured pressure (s): it passes the valve's own pressure
 #: oscillation (20 to 40 Hz) and smooths the sensor's noise
 TAU_DP = 0.002
@@ -148,6 +157,11 @@ JUMP = 0.1e5
 #: rise of the filtered axle torque (N m) above its value when the fill ended that marks the plates' first
 #: contact (the open plates' oil drag, several N m in cold oil, is already there then): the kiss point is found there
 ONSET_NM = 3.0
+#: time (s) from the start of the recording for the filtered axle torque to settle on the open plates' drag (the
+#: filter's 20 ms and the axle's first swing): the reference of the torque onset follows it until then
+DRAG_SETTLE = 0.06
+#: measured clutch output speed (rad/s) above which the plates carry torque (the sensor reads 0 below 1 rad/s)
+W1_MOVED = 2.0
 #: while holding without torque, the believed kiss point rises at this rate (Pa/s), at most SEARCH_SPAN above the design's
 SEARCH_RATE = 1.0e5
 SEARCH_SPAN = 0.6e5
@@ -259,6 +273,18 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
         cs[CS_REF] += (cs[CS_REF1] - cs[CS_REF]) * dt / (ctrl[TAU_REF] + dt)
     r = cs[CS_REF]
     e_t = r - meas[M_TR]
+    if cs[CS_ANSWERED] == 0.0:
+        # the plates answer: the axle torque rises, or the clutch output turns (a heavy one takes the clutch's
+        # first torque to spin up before the axle feels it)
+        moved = meas[M_W1] > W1_MOVED
+        if moved or cs[CS_TF] - cs[CS_TREQ] > ONSET_NM:
+            cs[CS_ANSWERED] = 1.0
+            # a torque answer well above the believed kiss point: the belief was low (a pressure signature in
+            # the stroke taken for the contact), and the next launch's hold must learn the real one, the kiss
+            # point that explains the torque above the open plates' drag (the least seen since the fill)
+            seen = _kiss_under(ctrl, meas, cs[CS_PF], cs[CS_TF] - cs[CS_TMIN])
+            if not moved and seen > cs[CS_KISS] + ctrl[HOLD_OFFSET]:
+                cs[CS_KISS] = seen
     # slip from the secondary flywheel, not from omega_1: the light CVT input shakes
     # with the clutch torque, and feeding that back through mu(slip) closes a fast loop
     ratio = _ratio(ctrl, meas)
@@ -273,8 +299,15 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
         # finish the fill; with the request there a jolt at contact is wanted rather than
         # feared, so the set point may lead the measured pressure further than in the hold
         p_set = p_hold + ctrl[REQ_LEAD]
+    elif cs[CS_ANSWERED] == 0.0:
+        # no torque yet although the hold should have the plates touching: the piston still strokes (the kiss
+        # point is higher than believed). A set point far above the pressure there is would open the valve wide
+        # and slam the pressure up when the plates stop the piston: lead it by no more than the fill's request does
+        p_set = min(p_set, cs[CS_PF] + ctrl[REQ_LEAD])
     u_prev = cs[CS_U]
-    wind_up = gated or (u_prev >= ctrl[U_MAX] and e_t > 0.0) or (u_prev <= ctrl[U_MIN] and e_t < 0.0)
+    # nor does the torque integrator wind up against plates that do not touch yet
+    wind_up = (gated or cs[CS_ANSWERED] == 0.0 or (u_prev >= ctrl[U_MAX] and e_t > 0.0)
+               or (u_prev <= ctrl[U_MIN] and e_t < 0.0))
     if not wind_up:
         cs[CS_ZT] += ctrl[KI_T] * sens * e_t * dt
     return p_set
@@ -389,6 +422,9 @@ def _launch(ctrl, cs, meas, t_ref):
     rate = 0.0 if first else (p - cs[CS_PPREV]) / dt
     cs[CS_DPF] += (rate - cs[CS_DPF]) * dt / (TAU_DP + dt)
     cs[CS_PPREV] = p
+    if cs[CS_N] * dt <= DRAG_SETTLE:
+        # the torque onset is a rise above the open plates' drag: not above the start of the recording
+        cs[CS_TREF] = cs[CS_TF]
     _find_kiss(ctrl, cs, meas, t_ref, phase, dt)
     if phase == HOLD and t_ref <= 0.0 and cs[CS_DIP] <= 0.0 and cs[CS_FOUND] != 0.0:
         _watch_creep(ctrl, cs, meas, dt)
@@ -427,6 +463,7 @@ def _launch(ctrl, cs, meas, t_ref):
         cs[CS_REF1] = 0.0
         # the friction factor learnt on earlier launches at this temperature, if any (the loop sets it)
         cs[CS_THETA] = cs[CS_THETA_START] if cs[CS_THETA_START] > 0.0 else ctrl[THETA0]
+        cs[CS_TREQ] = cs[CS_TF]
     if phase == TORQUE and abs(meas[M_WP] - meas[M_W1]) < SYNC_SLIP and meas[M_W1] > 0.0:
         # synchronised: the clutch can carry no more torque; close it firmly
         phase = LOCKUP
