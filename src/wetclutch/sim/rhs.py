@@ -466,6 +466,16 @@ def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
     return True
 
 
+@jit
+def rhs_call(t, x, net, ext, ws, dx, aux, refactor, full):
+    """:func:`rhs` at the right limit of the signals, as a real call: for the paths that run at most once per
+    output row, restart or located event, which would otherwise each compile a copy of it.
+
+    Pass the flags as plain booleans (``bool(False)``): a literal one compiles a copy of its own.
+    """
+    return rhs(t, False, x, net, ext, ws, dx, aux, refactor, full)
+
+
 @jit_inline
 def hold_margins(aux, x, net, grm, k):
     """A stuck gear holds while the input torque, seen at the output (``q``), has the
