@@ -151,18 +151,6 @@ def _step_limit(t, t_stop, h_max, bp_i, pwm, ws, net):
 
 
 @jit_inline
-def _stages(t, h, t_new, y_old, ws, net, ext):
-    """The stages of one step into ``ws.K`` and the 5th-order solution into ``ws.y_new``; False if singular."""
-    # one call site: each is a copy of the right-hand side to compile
-    for s in range(1, 7):
-        y = ws.y_tmp if s < 6 else ws.y_new
-        stage(y_old, ws.K, h, s, y)
-        if not rhs(t + C[s] * h if s < 6 else t_new, True, y, net, ext, ws, ws.K[s], ws.aux_new, False):
-            return False
-    return True
-
-
-@jit_inline
 def _locate_event(t, t_new, h, y_old, ws, net, ext):
     """The earliest event in ``(t, t_new]`` and its event function (``inf``, -1: none).
 
@@ -267,8 +255,13 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
             break
         copy(y_old, ws.x)
         t_new = t_lim if at_lim else t + h
-        if not _stages(t, h, t_new, y_old, ws, net, ext):
-            return ERR_SINGULAR
+        # the stages into ws.K and the 5th-order solution into ws.y_new, through one inlined right-hand side
+        # (each call site would be a copy of it to compile)
+        for s in range(1, 7):
+            y = ws.y_tmp if s < 6 else ws.y_new
+            stage(y_old, ws.K, h, s, y)
+            if not rhs(t + C[s] * h if s < 6 else t_new, True, y, net, ext, ws, ws.K[s], ws.aux_new, False):
+                return ERR_SINGULAR
         err = error_norm(y_old, ws.y_new, ws.K, h, rtol, atol, ws.y_tmp)  # y_tmp (stage 5) is free again
         log_err = np.log(err + 1e-30)
         if err > 1.0:
