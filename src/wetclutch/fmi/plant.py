@@ -25,7 +25,7 @@ from ..plant import clutch
 from ..rig.experiments import INPUT_RANGE
 from ..sim.integrator import advance
 from ..sim.network import failure, outputs
-from ..sim.rhs import rhs
+from ..sim.rhs import rhs_call
 from ..sim.signals import External
 from ..sim.workspace import FS_T, IS_N_OUT, IS_SETTLE, LOCKED, OK, aux_offsets, new_workspace
 
@@ -49,7 +49,7 @@ OUTPUTS = {
 @njit(cache=True, error_model="numpy")
 def _element_torques(t, net, ext, ws, dx, aux):
     """Element torques of the current state (the workspace's modes and constraint factors)."""
-    return rhs(t, False, ws.x, net, ext, ws, dx, aux, False, False)
+    return rhs_call(t, ws.x, net, ext, ws, dx, aux, bool(False), bool(False))
 
 
 @dataclass(frozen=True)

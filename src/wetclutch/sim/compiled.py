@@ -9,7 +9,10 @@ actuator's flows (a pressure stuck at zero), and events rely on ``inf``.
 
 ``inline="always"`` functions are inlined into their callers at numba's IR level and
 compiled with the callers' flags: the core's helpers are small named steps that take the
-workspace whole, at no cost in speed.
+workspace whole, at no cost in speed. Each call site is a copy to compile, though (numba
+copies and types the callee's whole inlined IR again, at a cost that grows faster than its
+size), so the big right-hand side is inlined at one call site only, the integrator's stages,
+and every other path calls one compiled copy of it (:data:`wetclutch.sim.rhs.rhs_call`).
 """
 
 from numba import njit

@@ -21,7 +21,7 @@ from . import signals
 from .compiled import jit, jit_inline
 from .dopri import C, dense, error_norm, stage
 from .modes import forget, settle, stale
-from .rhs import copy, events, rhs
+from .rhs import copy, events, rhs, rhs_call
 from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T,
                         IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE, IS_STEPS, IS_SWITCHES,
                         LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED)
@@ -31,7 +31,7 @@ from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_H, FS_LOCKS, FS_LOG_ERR, FS_P
 def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
     """State and event functions at ``theta_t`` inside the last step (fixed modes)."""
     dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
-    rhs(theta_t, False, ws.y_tmp, net, ext, ws, ws.dx, ws.aux_new, False)
+    rhs_call(theta_t, ws.y_tmp, net, ext, ws, ws.dx, ws.aux_new, bool(False), bool(True))
     events(ws.y_tmp, ws.aux_new, net, ws.clm, ws.grm, ws.g_new, ws.fstate)
 
 
@@ -41,7 +41,7 @@ def _emit(t, y, ws, net, ext, out_t, out_x, out_aux, out_mode):
     i = ws.istate[IS_N_OUT]
     if i >= out_t.shape[0]:
         return
-    rhs(t, False, y, net, ext, ws, ws.dx, ws.aux_new, False, False)
+    rhs_call(t, y, net, ext, ws, ws.dx, ws.aux_new, bool(False), bool(False))
     out_t[i] = t
     copy(out_x[i], y)
     copy(out_aux[i], ws.aux_new)
@@ -77,7 +77,7 @@ def _restart(ws, net, ext):
     if not settle(t, net, ext, ws):
         return False
     _log_modes(t, ws.clm_before, ws)
-    if not rhs(t, False, ws.x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, ws.clm, ws.grm)):
+    if not rhs_call(t, ws.x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, ws.clm, ws.grm), bool(True)):
         forget(ws.fact)
         return False
     copy(ws.K[0], ws.dx)
@@ -148,17 +148,6 @@ def _step_limit(t, t_stop, h_max, bp_i, pwm, ws, net):
     if t + h >= t_lim - 1e-12 * max(1.0, abs(t_lim)):
         return t_lim - t, True, hit_bp, hit_pwm, t_lim
     return h, False, hit_bp, hit_pwm, t_lim
-
-
-@jit_inline
-def _stages(t, h, t_new, y_old, ws, net, ext):
-    """The stages of one step into ``ws.K`` and the 5th-order solution into ``ws.y_new``; False if singular."""
-    for s in range(1, 6):
-        stage(y_old, ws.K, h, s, ws.y_tmp)
-        if not rhs(t + C[s] * h, True, ws.y_tmp, net, ext, ws, ws.K[s], ws.aux_new, False):
-            return False
-    stage(y_old, ws.K, h, 6, ws.y_new)
-    return rhs(t_new, True, ws.y_new, net, ext, ws, ws.K[6], ws.aux_new, False)
 
 
 @jit_inline
@@ -266,8 +255,13 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
             break
         copy(y_old, ws.x)
         t_new = t_lim if at_lim else t + h
-        if not _stages(t, h, t_new, y_old, ws, net, ext):
-            return ERR_SINGULAR
+        # the stages into ws.K and the 5th-order solution into ws.y_new, through one inlined right-hand side
+        # (each call site would be a copy of it to compile)
+        for s in range(1, 7):
+            y = ws.y_tmp if s < 6 else ws.y_new
+            stage(y_old, ws.K, h, s, y)
+            if not rhs(t + C[s] * h if s < 6 else t_new, True, y, net, ext, ws, ws.K[s], ws.aux_new, False):
+                return ERR_SINGULAR
         err = error_norm(y_old, ws.y_new, ws.K, h, rtol, atol, ws.y_tmp)  # y_tmp (stage 5) is free again
         log_err = np.log(err + 1e-30)
         if err > 1.0:

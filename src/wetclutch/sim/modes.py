@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from .compiled import jit, jit_inline
-from .rhs import LIM_MAX, LIM_MIN, capacity, hold_margins, poly, rate_command, ratio, rhs, slip
+from .rhs import LIM_MAX, LIM_MIN, capacity, hold_margins, poly, rate_command, ratio, rhs_call, slip
 from .workspace import FREE, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets, fs_ratio
 
 
@@ -37,7 +37,8 @@ def stale(fact, clm, grm):
         if fact[nc + k] != grm[k]:
             is_stale = True
             fact[nc + k] = grm[k]
-    return is_stale
+    # not the literal False it starts as: a compiled callee would get a copy for that type too
+    return bool(is_stale)
 
 
 @jit_inline
@@ -245,7 +246,7 @@ def settle(t, net, ext, ws):
     for _ in range(4 * (nc + ng) + 4):
         _project(x, net, clm, grm)
         _hold_ratios(t, x, net, ext, ws.fstate)
-        if not rhs(t, False, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm)):
+        if not rhs_call(t, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm), bool(True)):
             forget(ws.fact)
             return False
         if ws.istate[IS_REDUNDANT] != 0:

@@ -163,19 +163,6 @@ def _applied_torques(t, left, x, net, ext, dx, aux, z):
 
 
 @jit_inline
-def _actuator(t, left, x, net, ext, dx, z, full, p_src):
-    """The actuator's states' rates into ``dx`` and its force on the valve stem into ``z``; ``p_src`` plus its power."""
-    if net.act.shape[0] == 0:
-        return p_src
-    u = signals.value(int(net.act[act_.U_SIG]), t, left, net.sig, net.tab, ext)
-    f_stem, _ = act_.evaluate(x, net.act, u, ext, dx, full)
-    stem = int(net.act[act_.STEM_BODY])
-    z[stem] += f_stem
-    p_src += f_stem * x[stem]
-    return p_src
-
-
-@jit_inline
 def _clutch_torques(t, left, x, net, ext, clm, dx, aux, z):
     """Sliding clutches' torques into ``z`` and ``aux``, capacities into ``aux``, their dissipation rates into
     ``dx``; the number of locked clutches."""
@@ -437,7 +424,14 @@ def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
     grm = ws.grm
     z = ws.z
     p_drag, p_src, p_damp = _applied_torques(t, left, x, net, ext, dx, aux, z)
-    p_src = _actuator(t, left, x, net, ext, dx, z, full, p_src)
+    if net.act.shape[0] > 0:
+        # the actuator's states' rates into dx, its force on the valve stem into z and its power into p_src
+        # (here, not in a helper of its own: each level of inlining copies the actuator's whole IR once more)
+        u = signals.value(int(net.act[act_.U_SIG]), t, left, net.sig, net.tab, ext)
+        f_stem, _ = act_.evaluate(x, net.act, u, ext, dx, full)
+        stem = int(net.act[act_.STEM_BODY])
+        z[stem] += f_stem
+        p_src += f_stem * x[stem]
     nlock = _clutch_torques(t, left, x, net, ext, clm, dx, aux, z)
     if net.th.shape[0] > 0:
         # the heated clutch's slip power (its dissipation rate, 0 while locked) heats the pack
@@ -464,6 +458,16 @@ def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
     dx[e0 + nc + E_GEAR] = p_gear
     dx[e0 + nc + E_SOURCE] = p_src
     return True
+
+
+@jit
+def rhs_call(t, x, net, ext, ws, dx, aux, refactor, full):
+    """:func:`rhs` at the right limit of the signals, as a real call: for the paths that run at most once per
+    output row, restart or located event, which would otherwise each compile a copy of it.
+
+    Pass the flags as plain booleans (``bool(False)``): a literal one compiles a copy of its own.
+    """
+    return rhs(t, False, x, net, ext, ws, dx, aux, refactor, full)
 
 
 @jit_inline
