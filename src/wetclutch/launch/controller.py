@@ -166,8 +166,10 @@ W1_MOVED = 2.0
 SEARCH_RATE = 1.0e5
 SEARCH_SPAN = 0.6e5
 #: while the kiss point is not found, the hold's set point may lead the pressure this far (Pa): the piston must
-#: stroke on, and a contact is caught by its pressure jump
-SEARCH_LEAD = 0.1e5
+#: stroke on, and a contact is caught by its pressure jump. With the hold's integrator off while the piston strokes,
+#: the lead alone opens the valve: at 0.1 bar a stroke left 0.25 bar short by the fill crawled at 0.2 bar/s and the
+#: plates were still open at the request
+SEARCH_LEAD = 0.3e5
 #: a jump of the filtered pressure this far above the hold pressure in the hold: the plates have stopped the
 #: piston and the valve, open for the stroke's flow, has trapped the pressure high (Pa)
 CONTACT_JUMP = 0.1e5
