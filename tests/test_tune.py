@@ -41,7 +41,6 @@ def test_a_small_search_can_be_stopped_and_resumed(tmp_path):
     assert tune.score(again) == pytest.approx(both.best_score, rel=1e-12)
     # the tuned design is the finalist that scores best on the validation plants (seed + 1, twice as many); the
     # start is among the finalists, so the tuned design does no worse there than the start
-    assert "start" in both.finalists and both.chosen in both.finalists
     val = {name: tune.score(verify.run(d, Params(), 2 * 2, 4, 1, SMALL, corners=False, progress=False))
            for name, d in (("start", start), ("tuned", both.design))}
     assert val["tuned"] == pytest.approx(both.finalists[both.chosen][2], rel=1e-12)
@@ -119,12 +118,15 @@ def test_tune_command_writes_the_finalists_and_keeps_the_design_unless_beaten(tm
                  "--heldout-samples", "2", "--sequence", "1", "--quiet", "--out", str(out)]) == 0
     info = json.loads((out / "tune.json").read_text())
     fin = info["finalists"]
-    assert info["chosen"] in fin and "start" in fin
     # the chosen finalist scores best on the validation plants; the written controller is that finalist
     assert fin[info["chosen"]]["validation_score"] == min(v["validation_score"] for v in fin.values())
     written = settings.load(out / "controller.toml")
     start = designs.cached(Params(), "baseline")
-    if info["chosen"] == "start":
-        assert all(written.settings[n] == pytest.approx(start.settings[n]) for n in tune.TUNABLE["baseline"])
+    names = tune.TUNABLE["baseline"]
+    assert {n: written.settings[n] for n in names} == pytest.approx({n: info["gains"][n]["tuned"] for n in names})
+    # the start's gains are the design's: kept unchanged when the start is chosen
+    assert {n: info["gains"][n]["start"] for n in names} == pytest.approx({n: start.settings[n] for n in names})
+    assert (info["chosen"] == "start") == ({n: written.settings[n] for n in names}
+                                           == pytest.approx({n: start.settings[n] for n in names}))
     assert info["pass_rates"]["training"]["tuned"] == fin[info["chosen"]]["training_pass_rate"]
     assert "(chosen)" in (out / "tune.md").read_text()
