@@ -281,12 +281,13 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
         moved = meas[M_W1] > W1_MOVED
         if moved or cs[CS_TF] - cs[CS_TREQ] > ONSET_NM:
             cs[CS_ANSWERED] = 1.0
-            # a torque answer well above the believed kiss point: the belief was low (a pressure signature in
-            # the stroke taken for the contact), and the next launch's hold must learn the real one, the kiss
-            # point that explains the torque above the open plates' drag (the least seen since the fill)
-            seen = _kiss_under(ctrl, meas, cs[CS_PF], cs[CS_TF] - cs[CS_TMIN])
-            if not moved and seen > cs[CS_KISS] + ctrl[HOLD_OFFSET]:
-                cs[CS_KISS] = seen
+            if not moved:
+                # a torque answer well above the believed kiss point: the belief was low (a pressure signature in
+                # the stroke taken for the contact), and the next launch's hold must learn the real one, the kiss
+                # point that explains the torque above the open plates' drag (the least seen since the fill)
+                seen = _kiss_under(ctrl, meas, cs[CS_PF], cs[CS_TF] - cs[CS_TMIN])
+                if seen > cs[CS_KISS] + ctrl[HOLD_OFFSET]:
+                    cs[CS_KISS] = seen
     # slip from the secondary flywheel, not from omega_1: the light CVT input shakes
     # with the clutch torque, and feeding that back through mu(slip) closes a fast loop
     ratio = _ratio(ctrl, meas)

@@ -86,7 +86,8 @@ class Tuning:
     history: list[dict[str, Any]] = field(default_factory=list)
     best_score: float = math.inf
     best_rate: float = float("nan")
-    best_x: np.ndarray | None = None
+    #: the best candidate's logarithmic gains (zeros: the start)
+    best_x: np.ndarray = field(default_factory=lambda: np.zeros(0))
     start_training: tuple[float, float] = (math.inf, float("nan"))
     #: each finalist's (training score, training pass rate, validation score, validation pass rate)
     finalists: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
@@ -145,11 +146,10 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
         es = cma.CMAEvolutionStrategy(np.zeros(len(names)), 0.3,
                                       {"popsize": popsize, "seed": seed + 1, "verbose": -9,
                                        "bounds": [-math.log(SPAN), math.log(SPAN)]})
-        tuning = Tuning(start, start, names)
+        tuning = Tuning(start, start, names, best_x=np.zeros(len(names)))
         first = verified(start, samples, seed)
         # the start is the candidate to beat: a search that finds nothing better keeps it
         tuning.start_training = tuning.best_score, tuning.best_rate = score(first), first["pass_rate"]
-        tuning.best_x = np.zeros(len(names))
     while len(tuning.history) < generations:
         xs = es.ask()
         scores, rates = [], []
@@ -191,7 +191,7 @@ def _choose(tuning: Tuning, mean: np.ndarray, verified: Callable[[Design, int, i
     finalists: dict[str, tuple[float, float, float, float]] = {}
     seen: list[np.ndarray] = []
     for name, x in xs.items():
-        if x is None or any(np.array_equal(x, y) for y in seen):
+        if any(np.array_equal(x, y) for y in seen):
             continue
         seen.append(x)
         design = _candidate(start, names, x)
