@@ -59,9 +59,12 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       pressure integrator slow enough for the hold, the pressure rose in
       staircases of 20 to 60 ms, which made the response time vary from launch
       to launch. Once torque is requested the input therefore carries a
-      square-wave dither *wider* than the play (0.3 V at 125 Hz): the iron then
-      follows the mean coil current (the play is dithered out as a backlash is)
-      and the stem never sticks; the feedforward is shifted by the play, since
+      square-wave dither *wider* than the play (0.35 V at 167 Hz, a period of six
+      samples): the iron then follows the mean coil current (the play is dithered
+      out as a backlash is) and the stem never sticks. At 125 Hz, in oil with
+      little entrained air and with a lightly damped stem, the pressure rang in
+      a 20 to 30 Hz sawtooth through the slip phase (a torque ripple of 3 to 5 %
+      whose dips reset the response time); the feedforward is shifted by the play, since
       the map was measured on the rising branch and the dithered magnet works
       on the centre line. The pressure integrator is faster then than in the
       hold. Before the request (and until the fill is complete) the dither
@@ -95,7 +98,8 @@ settings and their design live in :mod:`wetclutch.launch.design`.
     branch, then an open-loop hold at the input that the static map gives for the kiss
     point plus the hold offset; once torque is requested, a PI loop on the measured
     ``T_r`` around that hold input, ``u = u_hold + kp e + ki int(e)``, with
-    conditional-integration anti-windup and the same square-wave dither as the design.
+    conditional-integration anti-windup and a square-wave dither wider than the play
+    (0.3 V at 125 Hz, with which its tuning rule's gains were checked).
     Its gains come from a documented tuning rule on the design plant
     (:func:`wetclutch.launch.design.baseline_gains`).
 """
