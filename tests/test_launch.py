@@ -10,6 +10,7 @@ from wetclutch.launch import loop as launch
 from wetclutch.launch import metrics
 from wetclutch.errors import WetclutchError
 from wetclutch.params import Params
+from wetclutch.params import load as params_load
 
 
 @pytest.fixture(scope="module")
@@ -134,3 +135,24 @@ def test_controller_refuses_a_friction_law_it_would_truncate():
     with pytest.raises(WetclutchError, match="friction.mu_slip_poly"):
         designs.design(design, "launch")
 
+
+
+def test_a_valve_stem_creeping_to_rest_at_its_friction_limit_does_not_stop_the_launch():
+    """After lock-up the input stays at its maximum without dither and the stem creeps to rest with its force
+    at the friction's limit: the force grazes the capacity, and a breakaway at once turned back into a lock
+    at one instant, over and over (the run stopped as Zeno behaviour). The lock must hold instead."""
+    p = params_load(overrides={
+        "driveline.J_1": 0.0036197424443680823, "driveline.ratio": 0.44802753667105555,
+        "driveline.eta": 0.9044077383554725, "driveline.k_a": 386.167897411133, "engage.T_load": 4.501597587588851,
+        "valve.d_stem": 38.07519596421963, "hydraulics.p_supply": 709730.9372482491,
+        "hydraulics.line_length": 1.0358335514366366, "hydraulics.p_prestress": 69849.8073766649,
+        "hydraulics.x_contact": 0.0014987316512260955, "hydraulics.leak_85C": 3.276693878525695e-12,
+        "hydraulics.air_fraction": 0.002562585228628782, "friction.mu_scale": 0.9819387434290435,
+        "friction.mu_slope": 0.9083925014979395})
+    cond = launch.Conditions(t_ref=177.16465154380592, oil_temp_C=71.21364455810087, seed=1854455492,
+                             noise_scale=1.3066909372644664)
+    res = launch.simulate(p, designs.cached(Params()), cond)
+    truth = res.truth
+    assert res.summary["t_sync_s"] is not None
+    # locked to the end: the clutch holds once synchronised
+    assert truth["locked"].iloc[-1]

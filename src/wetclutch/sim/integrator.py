@@ -23,8 +23,8 @@ from .dopri import C, dense, error_norm, stage
 from .modes import forget, settle, stale
 from .rhs import copy, events, rhs, rhs_call
 from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T,
-                        IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE, IS_STEPS, IS_SWITCHES,
-                        LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED)
+                        GRIP, IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE, IS_STEPS, IS_SWITCHES,
+                        LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
 
 
 @jit
@@ -210,6 +210,17 @@ def _emit_grid(t, t_seg, h, y_old, ws, net, ext, dt_out, t_out0, out_t, out_x, o
 
 
 @jit_inline
+def _grazing(e_ev, stalls, ws, net):
+    """A clutch that slid off from zero slip and at once turned back, twice at one instant: its torque only
+    grazed its capacity. The restart locks it; its grip margin keeps it locked until a real breakaway."""
+    nc = net.cl_a.shape[0]
+    if stalls >= 2 and e_ev < 2 * nc and e_ev % 2 == 0:
+        j = e_ev // 2
+        if ws.clm[j] == 1 or ws.clm[j] == -1:
+            ws.fstate[fs_grip(nc, net.gr_in.shape[0]) + j] = GRIP
+
+
+@jit_inline
 def _next_step(h, log_err, at_lim, ws):
     """PI step-size control after an accepted step (Hairer's DOPRI5: steadier near the stability limit),
     in logarithms: one log and one exp per step instead of two powers. Returns the step's factor."""
@@ -279,6 +290,7 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
                 stalls += 1
                 if stalls > 100:
                     return ERR_ZENO
+                _grazing(e_ev, stalls, ws, net)
             else:
                 stalls = 0
             t = t_ev

@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from .compiled import jit, jit_inline
-from .rhs import LIM_MAX, LIM_MIN, capacity, hold_margins, poly, rate_command, ratio, rhs_call, slip
-from .workspace import FREE, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets, fs_ratio
+from .rhs import LIM_MAX, LIM_MIN, capacity, hold_margins, rate_command, ratio, rhs_call, slip, static_limit
+from .workspace import FREE, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets, fs_grip, fs_ratio
 
 
 @jit_inline
@@ -178,24 +178,26 @@ def _gear_modes(x, dx, aux, net, grm, released):
 
 
 @jit_inline
-def _release_worst(aux, net, clm, released):
-    """Release the locked clutch most beyond its static capacity; True if one was. The test is the
-    event function itself, so a clutch kept locked starts with g >= 0.
+def _release_worst(aux, net, clm, released, fstate):
+    """Release the locked clutch most beyond its static capacity (with its grip margin, ``fs_grip``, which
+    a release clears); True if one was. The test is the event function itself, so a clutch kept locked
+    starts with g >= 0.
 
     Of several locks on one body (a redundant set, whose torques are the least-norm
     distribution), the one released carries its sliding torque from then on and the others
     the rest: the set lets go only when no distribution keeps every lock within its limit.
     A one-way clutch is limited only in the direction in which b overruns a."""
     nc = net.cl_a.shape[0]
+    o_grip = fs_grip(nc, net.gr_in.shape[0])
     worst = -1
     worst_excess = 0.0
     for j in range(nc):
         if clm[j] == LOCKED:
             if net.cl_oneway[j] != 0:
-                lim = net.cl_peak[j] * max(aux[nc + j], 0.0) * poly(net.cl_poly, j, 0.0)
+                lim = static_limit(net, j, max(aux[nc + j], 0.0), fstate[o_grip + j])
                 over = -aux[j] - lim
             else:
-                lim = net.cl_peak[j] * aux[nc + j] * poly(net.cl_poly, j, 0.0)
+                lim = static_limit(net, j, aux[nc + j], fstate[o_grip + j])
                 over = abs(aux[j]) - lim
             if over > 0.0:
                 excess = abs(aux[j]) / lim if lim > 0.0 else np.inf
@@ -206,6 +208,7 @@ def _release_worst(aux, net, clm, released):
         return False
     clm[worst] = 1 if aux[worst] > 0.0 else -1
     released[worst] = 1
+    fstate[o_grip + worst] = 0.0
     return True
 
 
@@ -254,7 +257,7 @@ def settle(t, net, ext, ws):
             # redundant locks: the clutches and brakes give way (carry their sliding torque) before
             # a stuck gear, whose share of the least-norm distribution may lie outside its bounds
             # while another distribution keeps it inside
-            if _release_worst(ws.aux, net, clm, released):
+            if _release_worst(ws.aux, net, clm, released, ws.fstate):
                 continue
         if _gear_modes(x, ws.dx, ws.aux, net, grm, released):
             if redundant:
@@ -262,7 +265,7 @@ def settle(t, net, ext, ws):
                 for j in range(nc):
                     released[j] = 0
             continue
-        if _release_worst(ws.aux, net, clm, released):
+        if _release_worst(ws.aux, net, clm, released, ws.fstate):
             continue
         if not _lock_backsliding(x, ws.dx, net, clm, released):
             break

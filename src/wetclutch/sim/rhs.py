@@ -34,7 +34,7 @@ from . import signals
 from .compiled import jit, jit_inline
 from .linalg import lu_factor, lu_solve, svd_jacobi
 from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, IS_BAD_BODY, IS_REDUNDANT, LOCKED, STUCK, aux_offsets,
-                        fs_ratio)
+                        fs_grip, fs_ratio)
 
 # columns of NetArrays.gr_lim: a moving ratio's limits and its rate limit (1/s)
 LIM_MIN, LIM_MAX, LIM_RATE = 0, 1, 2
@@ -485,9 +485,17 @@ def hold_margins(aux, x, net, grm, k):
 
 
 @jit_inline
+def static_limit(net, j, cap, grip):
+    """The torque a locked clutch ``j`` of capacity ``cap`` holds: its static friction, times ``1 + grip``."""
+    return net.cl_peak[j] * cap * poly(net.cl_poly, j, 0.0) * (1.0 + grip)
+
+
+@jit_inline
 def events(x, aux, net, clm, grm, g, fstate):
     """Event functions into ``g``: each is >= 0 while the current modes are valid."""
     nc = net.cl_a.shape[0]
+    ng = net.gr_in.shape[0]
+    o_grip = fs_grip(nc, ng)
     for j in range(nc):
         cap = aux[nc + j]
         m = clm[j]
@@ -495,12 +503,12 @@ def events(x, aux, net, clm, grm, g, fstate):
             # one-way: locked, it holds any torque that drives b forward and its static friction
             # backward; it slides only with b overrunning a
             if m == LOCKED:
-                g[2 * j] = net.cl_peak[j] * max(cap, 0.0) * poly(net.cl_poly, j, 0.0) + aux[j]
+                g[2 * j] = static_limit(net, j, max(cap, 0.0), fstate[o_grip + j]) + aux[j]
             else:
                 g[2 * j] = -slip(x, net, j)
             g[2 * j + 1] = 1.0
         elif m == LOCKED:
-            g[2 * j] = net.cl_peak[j] * cap * poly(net.cl_poly, j, 0.0) - abs(aux[j])
+            g[2 * j] = static_limit(net, j, cap, fstate[o_grip + j]) - abs(aux[j])
             g[2 * j + 1] = cap
         elif m == FREE:
             g[2 * j] = -cap
@@ -508,7 +516,6 @@ def events(x, aux, net, clm, grm, g, fstate):
         else:
             g[2 * j] = m * slip(x, net, j)
             g[2 * j + 1] = cap
-    ng = net.gr_in.shape[0]
     for k in range(ng):
         lam = aux[2 * nc + k]
         if abs(grm[k]) == STUCK:

@@ -42,7 +42,8 @@ FS_PWM_START = 4  # start of the current PWM period
 FS_PWM_H = 5  # + level (0 or 1): the first step after the last edge to that level (0: none yet)
 FS_LOCKS = 7  # + 2 j + LOCK_FIRST / LOCK_LAST: first and last time clutch j locked (-1: never)
 LOCK_FIRST, LOCK_LAST = 0, 1
-N_FSTATE = FS_LOCKS  # without the lock times, which follow, two per clutch, and the gears' slots (fs_ratio)
+N_FSTATE = FS_LOCKS  # without the lock times, which follow, two per clutch, the gears' slots (fs_ratio) and the
+# clutches' grip margins (fs_grip)
 
 # istate: the integer part
 IS_SETTLE = 0  # modes must be re-decided before the next step
@@ -76,6 +77,21 @@ def fs_ratio(nc):
     return FS_LOCKS + 2 * nc
 
 
+@jit_inline
+def fs_grip(nc, ng):
+    """Start of the clutches' slots in ``fstate``, one each, after the gears': the relative margin by which a
+    locked clutch's torque must exceed its static capacity to let go (0; :data:`GRIP` after a grazing
+    breakaway, until the clutch lets go)."""
+    return FS_LOCKS + 2 * nc + 3 * ng
+
+
+#: the margin of a grazing breakaway: a lock whose torque touches its capacity and turns back (a valve stem
+#: creeping to rest at its friction's limit) let go and stuck again at one instant, since slip and torque
+#: margin sit below rounding there; holding the lock until the torque exceeds the capacity by this much makes
+#: the breakaway a real one
+GRIP = 1e-9
+
+
 def moving_gears(net) -> int:
     """Number of gears of the compiled network ``net`` whose ratio moves (a state)."""
     return int(np.count_nonzero(net.gr_state >= 0))
@@ -95,7 +111,7 @@ class Workspace(NamedTuple):
     x: np.ndarray  # current state
     clm: np.ndarray  # clutch modes
     grm: np.ndarray  # gear modes (+1 forward, -1 backward, +-STUCK held at standstill)
-    fstate: np.ndarray  # (N_FSTATE + 2 nc + 3 ng,) see FS_* and fs_ratio
+    fstate: np.ndarray  # (N_FSTATE + 3 nc + 3 ng,) see FS_*, fs_ratio and fs_grip
     istate: np.ndarray  # (N_ISTATE,) see IS_*
     K: np.ndarray  # (7, nx) stages
     dx: np.ndarray
@@ -132,7 +148,7 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
     naux = aux_size(nc, ng, ns)
     # a moving ratio adds an event function (its limits) and a velocity-term column per gear
     n_mov = ng if moving_gears(net) else 0
-    fstate = np.zeros(N_FSTATE + 2 * nc + 3 * ng)
+    fstate = np.zeros(N_FSTATE + 3 * nc + 3 * ng)
     fstate[FS_T], fstate[FS_H], fstate[FS_LOG_ERR] = t0, h0, np.log(1e-4)
     fstate[FS_PWM_NEXT], fstate[FS_PWM_START] = -np.inf, t0
     fstate[FS_LOCKS:FS_LOCKS + 2 * nc] = -1.0
