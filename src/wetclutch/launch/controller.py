@@ -30,9 +30,13 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       error of that size.
     * **Creep watch in the hold.** What the waiting vehicle feels is measured: the
       filtered ``T_r``. Torque above the open plates' drag (the least torque seen
-      since the fill) beyond ``creep_limit`` at a calm hold pressure means the kiss
+      since the fill, and no less than zero: a negative torque is the axle ringing
+      after a jolt) beyond ``creep_limit`` at a calm hold pressure means the kiss
       point is believed too high (found in a pressure slam, or learnt on a warmer
-      clutch): the belief moves down to the kiss point that torque explains. A
+      clutch): the belief moves down to the kiss point that torque explains. The
+      other way round, a calm hold pressure more than ``hold_offset`` above the
+      kiss point that its torque explains shows the belief too low (a contact in
+      the full-input fill, found on a lagging average): it moves up to that one. A
       pressure trapped above the hold (cold oil, a stiffly damped stem stuck in its
       overlap) drains only once the magnet's force falls, after the input has crossed
       the whole play: the pressure loop then works on the falling branch of the map,
@@ -403,14 +407,16 @@ def _find_kiss(ctrl, cs, meas, t_ref, phase, dt):
 
 @_inline
 def _watch_creep(ctrl, cs, meas, dt):
-    """A kiss point believed too high (found in a pressure slam, or learnt on a warmer clutch) shows as creep at
-    a calm hold pressure: the belief moves down to the kiss point that the torque above the open plates' drag
-    (the least torque seen since the fill) explains, once that torque exceeds ``creep_limit``."""
-    cs[CS_TMIN] = min(cs[CS_TMIN], cs[CS_TF])
+    """The kiss point that a calm hold pressure and the torque above the open plates' drag (the least torque seen
+    since the fill) explain: a belief too high (found in a pressure slam, or learnt on a warmer clutch) shows as
+    creep, and moves down to it once that torque exceeds ``creep_limit``; a belief more than ``hold_offset``
+    below it moves up to it (the plates do not carry the torque the pressure above the belief would give)."""
+    # the drag pushes the waiting vehicle forward: a negative torque is the axle ringing after a jolt, no drag
+    cs[CS_TMIN] = min(cs[CS_TMIN], max(cs[CS_TF], 0.0))
     excess = cs[CS_TF] - cs[CS_TMIN]
-    if excess > ctrl[CREEP_LIMIT] and abs(cs[CS_PF5] - cs[CS_PF]) < ARM_RISE:
+    if abs(cs[CS_PF5] - cs[CS_PF]) < ARM_RISE:
         seen = _kiss_under(ctrl, meas, cs[CS_PF], excess)
-        if seen < cs[CS_KISS]:
+        if (excess > ctrl[CREEP_LIMIT] and seen < cs[CS_KISS]) or seen > cs[CS_KISS] + ctrl[HOLD_OFFSET]:
             cs[CS_KISS] += (seen - cs[CS_KISS]) * dt / (TAU_CREEP_KISS + dt)
 
 
@@ -446,7 +452,7 @@ def _launch(ctrl, cs, meas, t_ref):
         cs[CS_PSET] = p
         cs[CS_DIP] = ctrl[DIP_N]
         cs[CS_TREF] = cs[CS_TF]
-        cs[CS_TMIN] = cs[CS_TF]
+        cs[CS_TMIN] = max(cs[CS_TF], 0.0)
     if phase == HOLD and cs[CS_DUMPED] == 0.0 and t_ref <= 0.0 and cs[CS_PF] > p_hold + CONTACT_JUMP:
         # contact: the stem sits in its overlap with the pressure trapped above the hold and only
         # the seal leakage would bring it down (creep on the waiting vehicle); dip the input
