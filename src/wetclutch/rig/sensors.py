@@ -17,6 +17,7 @@ from __future__ import annotations
 import zlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from types import MappingProxyType
 
 import numpy as np
@@ -76,6 +77,16 @@ N_SENSOR = 11
 _inline = njit(cache=True, error_model="numpy", _nrt=False, inline="always")
 
 
+@lru_cache(maxsize=64)
+def _section(cutoff_hz: float, rate_hz: float) -> tuple[float, ...]:
+    """The second-order Butterworth section (b0, b1, b2, a1, a2) and its steady-state initial conditions per
+    unit input: designed once per cut-off and rate, since every launch builds its sensor table."""
+    # second-order sections are the same filter as butter+lfilter but stay accurate for
+    # cut-offs far below the sampling rate
+    sos = signal.butter(2, cutoff_hz, fs=rate_hz, output="sos")[0]
+    return (*sos[:3], *sos[4:6], *signal.sosfilt_zi(sos[None, :])[0])
+
+
 def sensor_table(channels: Sequence[str], rate_hz: float, sensors: Mapping[str, SensorSpec] | None = None,
                  noise: bool = True, noise_scale: float = 1.0) -> np.ndarray:
     """Rows of the sensor chain (see the slot names) for ``channels`` sampled at ``rate_hz``.
@@ -95,12 +106,7 @@ def sensor_table(channels: Sequence[str], rate_hz: float, sensors: Mapping[str, 
             if spec.cutoff_hz >= 0.5 * rate_hz:
                 raise WetclutchError(f"cut-off {spec.cutoff_hz} Hz of '{name}' is above the Nyquist frequency of "
                                      f"{rate_hz:g} Hz sampling")
-            # second-order sections are the same filter as butter+lfilter but stay accurate for
-            # cut-offs far below the sampling rate
-            sos = signal.butter(2, spec.cutoff_hz, fs=rate_hz, output="sos")[0]
-            table[c, B0:B2 + 1] = sos[:3]
-            table[c, A1:A2 + 1] = sos[4:6]
-            table[c, ZI0:ZI1 + 1] = signal.sosfilt_zi(sos[None, :])[0]
+            table[c, B0:ZI1 + 1] = _section(spec.cutoff_hz, rate_hz)
             table[c, HAS_FILTER] = 1.0
         table[c, NOISE_STD] = spec.noise_std * noise_scale
         table[c, RESOLUTION] = spec.resolution
