@@ -18,16 +18,16 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       ``fill_exit`` below the kiss point (the piston has stroked most of its way;
       in the stroke the pressure is the reset spring's force over the piston
       area, so it measures the piston's position), then a pressure set point
-      that rises at ``hold_rate`` to ``hold_offset`` above the kiss point. The
-      plates then just touch: at that low normal force friction is small (the
-      friction knee), so only a creep torque of a few N m flows, which the road
-      load holds. Holding *at* rather than *below* the kiss point matters: once
+      that rises at ``hold_rate`` to the kiss point (plus ``hold_offset``, by
+      default none: the launch finds the kiss point itself, and a hold above it
+      presses the plates, creep on the waiting vehicle). The plates then just
+      touch: at that low normal force friction is small (the friction knee), so
+      only a creep torque of a few N m flows, which the road load holds. Holding *at* rather than *below* the kiss point matters: once
       the plates touch, the oil volume becomes a thousand times stiffer than the
       reset spring, and a valve opened wide to stroke the piston then slams the
       pressure towards the supply. The kiss point (contact pressure) comes from
       identification (``wetclutch identify`` estimates it as the pressure at
-      torque onset) or the parameter set; ``hold_offset`` covers a kiss-point
-      error of that size.
+      torque onset) or the parameter set, and the launch corrects it (below).
     * **Creep watch in the hold.** What the waiting vehicle feels is measured: the
       filtered ``T_r``. Torque above the open plates' drag (the least torque seen
       since the fill, and no less than zero: a negative torque is the axle ringing
