@@ -30,6 +30,7 @@ from ..params import Params, check_oil_temp
 from ..physics import actuator
 from ..plant import clutch
 from ..rig.sensors import filter_sample, reading, sensor_table
+from ..sim import coldstart
 from ..sim.integrator import advance
 from ..sim.network import Trajectory, failure, outputs
 from ..sim.rhs import ratio, spring_torque
@@ -75,6 +76,18 @@ def _true_values(net, x, probe, temp, truth):
         truth[c] = x[probe[c]]
     truth[control.M_RATIO] = ratio(x, net, probe[control.M_RATIO])
     truth[control.M_TEMP] = temp
+
+
+def _cold_jobs(net, ext, ws) -> list[tuple[str, str, tuple]]:
+    """What the closed loop compiles besides the integrator, for a first run's second process."""
+    rec, meas = np.zeros(1), np.zeros(N_CH)
+    return [coldstart.job(control.step, rec, np.zeros(control.N_CS), meas, 0.0),
+            coldstart.job(ratio_hold.step, rec, np.zeros(ratio_hold.N_HS), meas, 0.0, False),
+            coldstart.job(ratio_hold.valve, np.zeros(ratio_hold.N_HS), meas, 0.0, False),
+            coldstart.job(_true_values, net, ws.x, np.zeros(N_PROBE, dtype=np.int64), 0.0, meas)]
+
+
+coldstart.register(_cold_jobs)
 
 
 @_jit
@@ -257,6 +270,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     if d.kind == "launch":
         cs[control.CS_THETA_START] = learnt.friction_factor(temp) or 0.0
     t_after = cond.t_after + (cond.hold_time if cond.post_sync_hold else 0.0)
+    coldstart.begin(net, ext, ws)
     status, m = _closed_loop(net, ext, ws, 0, probe, temp, sensors, noise, ctrl, cs, hold, hs, t_ref, cond.dt,
                              t_after, *out, out_meas, out_u)
     if status == ERR_STEPS:

@@ -7,7 +7,8 @@
   (records and their layouts), :mod:`~wetclutch.sim.rhs` (right-hand side and event
   functions), :mod:`~wetclutch.sim.modes` (stick/slip decisions),
   :mod:`~wetclutch.sim.dopri` (the Runge-Kutta pair), :mod:`~wetclutch.sim.linalg`,
-  :mod:`~wetclutch.sim.integrator` (:func:`~wetclutch.sim.integrator.advance`).
+  :mod:`~wetclutch.sim.integrator` (:func:`~wetclutch.sim.integrator.advance`), and
+  :mod:`~wetclutch.sim.coldstart` (a first run's compilation on two processes).
 """
 
 from .network import GROUND, Network, Trajectory, integrate

@@ -30,6 +30,7 @@ import numpy as np
 from ..errors import SimulationError
 from ..physics import actuator as act_mod
 from ..physics import thermal as th_mod
+from . import coldstart
 from . import workspace as wsp
 from .integrator import advance
 from .signals import Signal, as_signal, compile_signals
@@ -586,6 +587,7 @@ def integrate(
         raise ValueError("dt_out must be in (0, t_end]")
     net, x0, ext = network.compile()
     ws = wsp.new_workspace(net, x0)
+    coldstart.begin(net, ext, ws)
     out = outputs(int(round(t_end / dt_out)) + 1, x0.size, ws.aux.size, len(network.clutches))
     status = advance(net, ext, ws, float(t_end), float(dt_out), 0.0, rtol, atol, h_max, *out)
     if status != wsp.OK:
