@@ -106,7 +106,8 @@ def test_bad_profile_files_are_one_line_errors(tmp_path, content):
 
 
 @pytest.mark.parametrize("kwargs, field", [({"t_ref": -5.0}, "--t-ref"), ({"oil_temp_C": 400.0}, "--oil-temp"),
-                                           ({"profile": "zigzag"}, "--profile"), ({"noise_scale": -1.0}, "--noise-scale")])
+                                           ({"profile": "zigzag"}, "--profile"), ({"noise_scale": -1.0}, "--noise-scale"),
+                                           ({"rtol": 0.0}, "rtol"), ({"rtol": 0.1}, "rtol")])
 def test_bad_conditions_name_the_field(kwargs, field):
     with pytest.raises(WetclutchError, match=field):
         launch.Conditions(**kwargs).checked()

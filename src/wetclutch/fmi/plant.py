@@ -21,6 +21,7 @@ from numba import njit
 
 from ..errors import SimulationError, WetclutchError
 from ..params import Params, check_oil_temp
+from ..launch import loop as launch_loop
 from ..plant import clutch
 from ..rig.experiments import INPUT_RANGE
 from ..sim.integrator import advance
@@ -32,7 +33,7 @@ from ..sim.workspace import FS_T, IS_N_OUT, IS_SETTLE, LOCKED, OK, aux_offsets, 
 #: external input slots of the network
 U_SLOT, LOAD_SLOT = 0, 1
 #: the engine's tolerances, those of the closed launch loop
-RTOL, ATOL = 1e-6, 1e-9
+RTOL, ATOL = launch_loop.RTOL, launch_loop.ATOL
 #: outputs, their units and descriptions
 OUTPUTS = {
     "p_clutch": ("Pa", "clutch pressure"),
