@@ -275,7 +275,8 @@ def _cmd_tune(args: argparse.Namespace) -> None:
              "held-out": {"start": rate(start, args.heldout_samples, args.heldout_seed),
                           "tuned": rate(res.design, args.heldout_samples, args.heldout_seed)}}
     meta = {"samples": args.samples, "seed": args.seed, "heldout_samples": args.heldout_samples,
-            "heldout_seed": args.heldout_seed, "sequence": args.sequence}
+            "heldout_seed": args.heldout_seed, "sequence": args.sequence, "generations": args.generations,
+            "popsize": args.popsize}
     tune_report.write(res, rates, args.out, meta)
     print(f"tune {start.kind}: training {100 * rates['training']['start']:.1f} -> {100 * rates['training']['tuned']:.1f} %, "
           f"held-out {100 * rates['held-out']['start']:.1f} -> {100 * rates['held-out']['tuned']:.1f} % "

@@ -1,0 +1,81 @@
+"""Tuning of the default plant's launch controller: wall time, launches per second, what it gained.
+
+Runs ``wetclutch tune --out DIR`` with its defaults (40 training plants of the shipped ranges,
+8 generations of 8 candidates, 3 launches per plant, 200 held-out plants) on the built-in rig in
+a fresh interpreter (warm numba cache), and prints the wall time, the number of launches the
+run made (from its settings: the start and every candidate on the training plants, the
+finalists on twice as many validation plants, the tuned and the untuned design on the held-out
+plants) and so the launches per second, then the pass rates of the untuned and the tuned design
+on the training and on the held-out plants (``tune.json``).
+
+The baseline, measured in the same run: nominal launches one after another in this process; the
+ratio of the two rates is what the tuning's parallel verifications make of the machine's cores.
+
+Target: under 15 minutes on 2 cores.
+
+Usage: ``python benchmarks/bench_tune.py [--controller launch|baseline]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+TARGET_S = 15 * 60
+
+
+def launches(meta: dict, chosen_finalists: int) -> int:
+    """Launches of a tuning run with the settings ``meta`` (``tune.json``) and that many finalists."""
+    n, seq = meta["samples"], meta["sequence"]
+    training = n * (1 + meta["generations"] * meta["popsize"])
+    # finalists on twice as many validation plants; the search's mean also on the training plants
+    validation = chosen_finalists * 2 * n + (n if "search mean" in meta["finalists"] else 0)
+    return seq * (training + validation + 2 * meta["heldout_samples"])
+
+
+def serial_rate(n: int = 20) -> float:
+    """Launches per second of nominal launches one after another in this process (warm cache)."""
+    from wetclutch.launch import loop, metrics
+    from wetclutch.params import Params
+
+    def one() -> None:
+        loop.simulate(Params(), "launch", loop.Conditions(t_ref=100.0, oil_temp_C=85.0), nominal=metrics.Response.empty())
+
+    one()
+    t0 = time.perf_counter()
+    for _ in range(n):
+        one()
+    return n / (time.perf_counter() - t0)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--controller", default="launch", choices=("launch", "baseline"))
+    a = ap.parse_args()
+    exe = str(Path(sys.executable).with_name("wetclutch"))
+    base = serial_rate()
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "tune"
+        t0 = time.perf_counter()
+        subprocess.run([exe, "tune", "--controller", a.controller, "--out", str(out), "--quiet"], check=True)
+        wall = time.perf_counter() - t0
+        meta = json.loads((out / "tune.json").read_text())
+    n = launches(meta, len(meta["finalists"]))
+    rates = meta["pass_rates"]
+    print(f"machine: {os.cpu_count()} cores")
+    print(f"tune {a.controller}: {wall / 60:.1f} min, {n} launches, {n / wall:.1f} launches/s "
+          f"({n / wall / base:.2f} x one process's nominal launches, {base:.1f}/s, same run)")
+    for split in ("training", "held-out"):
+        print(f"  {split:9s} pass rate: untuned {100 * rates[split]['start']:.1f} %, tuned {100 * rates[split]['tuned']:.1f} %")
+    print(f"  chosen: {meta['chosen']}")
+    print(f"target: under 15 min: {'met' if wall < TARGET_S else 'not met'}")
+
+
+if __name__ == "__main__":
+    main()
