@@ -21,7 +21,7 @@ from . import signals
 from .compiled import jit, jit_inline
 from .dopri import C, dense, error_norm, stage
 from .modes import forget, settle, stale
-from .rhs import copy, events, rhs, rhs_call
+from .rhs import copy, events, rhs, rhs_call, slip
 from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T,
                         GRIP, IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE, IS_STEPS, IS_SWITCHES,
                         LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
@@ -33,6 +33,19 @@ def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
     dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
     rhs_call(theta_t, ws.y_tmp, net, ext, ws, ws.dx, ws.aux_new, bool(False), bool(True))
     events(ws.y_tmp, ws.aux_new, net, ws.clm, ws.grm, ws.g_new, ws.fstate)
+
+
+@jit_inline
+def _event_value(e, theta_t, t_old, h, y_old, ws, net, ext):
+    """Event function ``e`` at ``theta_t`` inside the last step (fixed modes). A sliding clutch's slip through zero
+    is a function of the state alone, which the dense output gives; every other event needs the right-hand
+    side's torques. Either way the value is the one :func:`_eval_at` gives."""
+    j = e // 2
+    if e < 2 * net.cl_a.shape[0] and e % 2 == 0 and net.cl_oneway[j] == 0 and (ws.clm[j] == 1 or ws.clm[j] == -1):
+        dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
+        return ws.clm[j] * slip(ws.y_tmp, net, j)
+    _eval_at(theta_t, t_old, h, y_old, ws, net, ext)
+    return ws.g_new[e]
 
 
 @jit_inline
@@ -165,8 +178,7 @@ def _locate_event(t, t_new, h, y_old, ws, net, ext):
             ga = ws.g_old[e]
             tb = t_new if t_ev == np.inf else t_ev
             if tb < t_new:
-                _eval_at(tb, t, h, y_old, ws, net, ext)
-                gb = ws.g_new[e]
+                gb = _event_value(e, tb, t, h, y_old, ws, net, ext)
                 if gb >= 0.0:
                     continue
             else:
@@ -178,8 +190,7 @@ def _locate_event(t, t_new, h, y_old, ws, net, ext):
                 tm = (ta * gb - tb * ga) / (gb - ga)
                 if not (ta < tm < tb):
                     tm = 0.5 * (ta + tb)
-                _eval_at(tm, t, h, y_old, ws, net, ext)
-                gm = ws.g_new[e]
+                gm = _event_value(e, tm, t, h, y_old, ws, net, ext)
                 if gm >= 0.0:
                     ta = tm
                     ga = gm
