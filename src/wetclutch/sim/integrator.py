@@ -87,10 +87,12 @@ def _restart(ws, net, ext):
     """Re-decide modes at the current time and refresh the first stage."""
     t = ws.fstate[FS_T]
     copy(ws.clm_before, ws.clm)
-    if not settle(t, net, ext, ws):
+    decided = settle(t, net, ext, ws)
+    if decided < 0:
         return False
     _log_modes(t, ws.clm_before, ws)
-    if not rhs_call(t, ws.x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, ws.clm, ws.grm), bool(True)):
+    # the mode decision's last evaluation is the first stage, unless it ended on a change
+    if decided == 0 and not rhs_call(t, ws.x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, ws.clm, ws.grm), bool(True)):
         forget(ws.fact)
         return False
     copy(ws.K[0], ws.dx)

@@ -234,7 +234,9 @@ def settle(t, net, ext, ws):
     """Decide consistent modes at time ``t`` for the workspace's state; project newly locked speeds.
 
     Uses ``ws.x``, ``ws.clm``, ``ws.grm`` (updated), ``ws.dx``, ``ws.aux`` and the constraint
-    buffers. Returns False if the system is singular.
+    buffers. Returns -1 if the system is singular, 1 if ``ws.dx`` and ``ws.aux`` are those of the
+    decided modes at ``ws.x`` (the last evaluation confirmed them), 0 if they are not (the
+    iterations ran out on a change).
     """
     x = ws.x
     clm = ws.clm
@@ -251,7 +253,7 @@ def settle(t, net, ext, ws):
         _hold_ratios(t, x, net, ext, ws.fstate)
         if not rhs_call(t, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm), bool(True)):
             forget(ws.fact)
-            return False
+            return -1
         if ws.istate[IS_REDUNDANT] != 0:
             redundant = True
             # redundant locks: the clutches and brakes give way (carry their sliding torque) before
@@ -268,5 +270,5 @@ def settle(t, net, ext, ws):
         if _release_worst(ws.aux, net, clm, released, ws.fstate):
             continue
         if not _lock_backsliding(x, ws.dx, net, clm, released):
-            break
-    return True
+            return 1
+    return 0
