@@ -29,7 +29,7 @@ from typing import Any
 
 import numba
 
-from .integrator import _eval_at, _log_modes, _pwm_edge
+from .integrator import _event_value, _log_modes, _pwm_edge
 from .rhs import rhs_call
 
 _started = False
@@ -45,7 +45,7 @@ def job(fn, *args) -> tuple[str, str, tuple]:
 def _core_jobs(net, ext, ws) -> list[tuple[str, str, tuple]]:
     """``rhs_call`` first, then the integrator's other helpers that call it, on these records."""
     return [job(rhs_call, 0.0, ws.x, net, ext, ws, ws.dx, ws.aux, False, True),
-            job(_eval_at, 0.0, 0.0, 1.0, ws.y_old, ws, net, ext),
+            job(_event_value, 0, 0.0, 0.0, 1.0, ws.y_old, ws, net, ext),
             job(_pwm_edge, 0.0, ws, net, ext),
             job(_log_modes, 0.0, ws.clm_before, ws)]
 

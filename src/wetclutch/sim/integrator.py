@@ -27,7 +27,7 @@ from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_H, FS_LOCKS, FS_LOG_ERR, FS_P
                         LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
 
 
-@jit
+@jit_inline
 def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
     """State and event functions at ``theta_t`` inside the last step (fixed modes)."""
     dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
@@ -35,11 +35,12 @@ def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
     events(ws.y_tmp, ws.aux_new, net, ws.clm, ws.grm, ws.g_new, ws.fstate)
 
 
-@jit_inline
+@jit
 def _event_value(e, theta_t, t_old, h, y_old, ws, net, ext):
     """Event function ``e`` at ``theta_t`` inside the last step (fixed modes). A sliding clutch's slip through zero
     is a function of the state alone, which the dense output gives; every other event needs the right-hand
-    side's torques. Either way the value is the one :func:`_eval_at` gives."""
+    side's torques. Either way the value is the one :func:`_eval_at` gives. A real call, as the evaluation was:
+    inlined, the dense output would add to the integrator's compile time."""
     j = e // 2
     if e < 2 * net.cl_a.shape[0] and e % 2 == 0 and net.cl_oneway[j] == 0 and (ws.clm[j] == 1 or ws.clm[j] == -1):
         dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
@@ -179,20 +180,28 @@ def _locate_event(t, t_new, h, y_old, ws, net, ext):
             ta = t
             ga = ws.g_old[e]
             tb = t_new if t_ev == np.inf else t_ev
-            if tb < t_new:
-                gb = _event_value(e, tb, t, h, y_old, ws, net, ext)
-                if gb >= 0.0:
-                    continue
-            else:
-                gb = ws.g_new[e]
+            gb = ws.g_new[e]
+            # before an earlier event, this one's sign there comes first (one call site of the inlined evaluation)
+            ahead = tb < t_new
+            before = False
             side = 0
-            for _ in range(100):
-                if tb - ta <= 1e-13 * max(1.0, abs(tb)):
-                    break
-                tm = (ta * gb - tb * ga) / (gb - ga)
-                if not (ta < tm < tb):
-                    tm = 0.5 * (ta + tb)
+            for _ in range(101 if ahead else 100):
+                if ahead:
+                    tm = tb
+                else:
+                    if tb - ta <= 1e-13 * max(1.0, abs(tb)):
+                        break
+                    tm = (ta * gb - tb * ga) / (gb - ga)
+                    if not (ta < tm < tb):
+                        tm = 0.5 * (ta + tb)
                 gm = _event_value(e, tm, t, h, y_old, ws, net, ext)
+                if ahead:
+                    ahead = False
+                    gb = gm
+                    before = gm >= 0.0
+                    if before:
+                        break
+                    continue
                 if gm >= 0.0:
                     ta = tm
                     ga = gm
@@ -205,6 +214,8 @@ def _locate_event(t, t_new, h, y_old, ws, net, ext):
                     if side == 1:
                         ga *= 0.5
                     side = 1
+            if before:
+                continue  # no crossing before the earlier event
             t_ev = tb
             e_ev = e
     return t_ev, e_ev
