@@ -86,3 +86,25 @@ def _small_records():
     net.clutch("c", a, GROUND, capacity=1.0)
     rec, x0, ext = net.compile()
     return rec, ext, new_workspace(rec, x0)
+
+
+def test_the_first_compile_of_rhs_call_waits_for_the_second_process(monkeypatch, tmp_path):
+    # a stand-in second process that takes its time, leaves a mark and then reports rhs_call done
+    mark = tmp_path / "done"
+    script = (f"import sys, time, pathlib; sys.stdin.buffer.read(); time.sleep(0.5); "
+              f"pathlib.Path({str(mark)!r}).write_text('x'); print('rhs_call', flush=True)")
+    popen = subprocess.Popen
+
+    def second_process(args, **kw):
+        return popen([sys.executable, "-c", script], **kw)
+
+    monkeypatch.setattr(coldstart, "_started", False)
+    monkeypatch.setattr(coldstart, "cold", lambda: True)
+    monkeypatch.setattr(coldstart.subprocess, "Popen", second_process)
+    monkeypatch.setattr(coldstart.rhs_call, "overloads", {})  # as in a process that has compiled nothing
+    net, ext, ws = _small_records()
+    coldstart.begin(net, ext, ws)
+    assert "compile" in vars(coldstart.rhs_call)
+    coldstart.rhs_call.compile(coldstart._core_jobs(net, ext, ws)[0][2])  # what numba's typing of a caller does
+    assert mark.exists()  # it waited for the second process's line
+    assert "compile" not in vars(coldstart.rhs_call)  # and the hook is gone: later compiles are numba's own

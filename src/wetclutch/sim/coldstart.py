@@ -21,6 +21,7 @@ from __future__ import annotations
 import importlib
 import os
 import pickle
+import select
 import subprocess
 import sys
 from collections.abc import Callable
@@ -32,6 +33,8 @@ import numba
 from .integrator import _event_value, _log_modes, _pwm_edge
 from .rhs import rhs_call
 
+#: seconds to wait for the second process's ``rhs_call`` (it takes some 20 s on 2 cores)
+WAIT = 300.0
 _started = False
 _REGISTERED: list[Callable[[Any, Any, Any], list[tuple[str, str, tuple]]]] = []
 
@@ -90,9 +93,10 @@ def begin(net, ext, ws) -> None:
 
     def compile_after_child(sig):
         # numba asks for rhs_call when typing a caller: take the second process's from the cache
-        # (its first line, or its end if it failed)
+        # (its first line, or its end if it failed; past WAIT seconds this process compiles it itself)
         del rhs_call.compile
-        child.stdout.readline()
+        if os.name != "posix" or select.select([child.stdout], [], [], WAIT)[0]:
+            child.stdout.readline()
         return own(sig)
 
     rhs_call.compile = compile_after_child
