@@ -8,12 +8,14 @@ of the right-hand side that its restarts, located events and output rows call
 second only when its type inference reaches a call to it, after it has spent some ten seconds
 inlining its stages. So when :func:`begin` finds no cached ``rhs_call``, it starts a second
 Python process that compiles ``rhs_call`` into the cache (``python -m wetclutch.sim.coldstart``),
-and holds this process's own compilation of it until that process has finished; then it loads
-the cached one. The results are those of a serial compile (the same function, compiled once).
+then the integrator's event evaluation, PWM edge and mode log and what the layers above
+:func:`register` (the closed loop's controller), and holds this process's own compilation of
+``rhs_call`` until the second process reports it done; then it loads the cached one. The results
+are those of a serial compile (each function compiled once).
 
 Where no second interpreter can be started (``sys.executable`` is not Python, as inside a
-simulation tool that embeds it) or the second process fails, this process compiles
-``rhs_call`` itself, as it would without this module.
+simulation tool that embeds it), or the second process fails or has not reported within
+:data:`WAIT` seconds, this process compiles ``rhs_call`` itself, as it would without this module.
 """
 
 from __future__ import annotations

@@ -180,28 +180,20 @@ def _locate_event(t, t_new, h, y_old, ws, net, ext):
             ta = t
             ga = ws.g_old[e]
             tb = t_new if t_ev == np.inf else t_ev
-            gb = ws.g_new[e]
-            # before an earlier event, this one's sign there comes first (one call site of the inlined evaluation)
-            ahead = tb < t_new
-            before = False
-            side = 0
-            for _ in range(101 if ahead else 100):
-                if ahead:
-                    tm = tb
-                else:
-                    if tb - ta <= 1e-13 * max(1.0, abs(tb)):
-                        break
-                    tm = (ta * gb - tb * ga) / (gb - ga)
-                    if not (ta < tm < tb):
-                        tm = 0.5 * (ta + tb)
-                gm = _event_value(e, tm, t, h, y_old, ws, net, ext)
-                if ahead:
-                    ahead = False
-                    gb = gm
-                    before = gm >= 0.0
-                    if before:
-                        break
+            if tb < t_new:
+                gb = _event_value(e, tb, t, h, y_old, ws, net, ext)
+                if gb >= 0.0:
                     continue
+            else:
+                gb = ws.g_new[e]
+            side = 0
+            for _ in range(100):
+                if tb - ta <= 1e-13 * max(1.0, abs(tb)):
+                    break
+                tm = (ta * gb - tb * ga) / (gb - ga)
+                if not (ta < tm < tb):
+                    tm = 0.5 * (ta + tb)
+                gm = _event_value(e, tm, t, h, y_old, ws, net, ext)
                 if gm >= 0.0:
                     ta = tm
                     ga = gm
@@ -214,8 +206,6 @@ def _locate_event(t, t_new, h, y_old, ws, net, ext):
                     if side == 1:
                         ga *= 0.5
                     side = 1
-            if before:
-                continue  # no crossing before the earlier event
             t_ev = tb
             e_ev = e
     return t_ev, e_ev
