@@ -30,6 +30,20 @@ def test_two_inertias_constant_capacity_sync_time():
     assert tr.speed("b")[-1] == pytest.approx(w_common, rel=1e-9)
 
 
+
+def test_absolute_tolerance_per_state_is_checked_and_one_value_means_every_state():
+    net = Network()
+    a = net.body("a", 0.7, w0=120.0)
+    b = net.body("b", 2.3, w0=-5.0)
+    net.clutch("c", a, b, 13.0)
+    one = integrate(net, 2.0, atol=1e-10)
+    each = integrate(net, 2.0, atol=np.full(net.n_state, 1e-10))
+    assert np.array_equal(one.x, each.x)
+    for bad in (np.full(net.n_state + 1, 1e-10), np.zeros(net.n_state), -1e-10):
+        with pytest.raises(ValueError, match="atol"):
+            integrate(net, 2.0, atol=bad)
+
+
 @pytest.mark.parametrize("eta", [1.0, 0.9])
 def test_clutch_into_lossy_gear_sync_time(eta):
     # forward power flow: the output inertia is seen through the gear as J_s r^2 / eta
@@ -177,7 +191,8 @@ def _chunked_run(network, refactor_always: bool) -> np.ndarray:
         ws.istate[0] = 1
         if refactor_always:
             ws.fact[:] = engine.NO_MODE
-        assert integrator.advance(net, ext, ws, (k + 1) * 1e-3, 1e-3, 0.0, 1e-8, 1e-10, np.inf, *out) == engine.OK
+        assert integrator.advance(net, ext, ws, (k + 1) * 1e-3, 1e-3, 0.0, 1e-8, np.full(x0.size, 1e-10), np.inf,
+                                          *out) == engine.OK
     return out[1][: ws.istate[1]]
 
 

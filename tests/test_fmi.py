@@ -7,6 +7,14 @@ run. What can differ is the round-off of the communication times (FMPy accumulat
 ``t += h``, the loop computes ``(k + 1) h``), which moves a step end by ~1e-16 s. So the
 FMU must match to 1e-6 of each signal's range (measured: states identical, torques
 within 1e-8 of their range), and the lock state exactly.
+
+A closed loop is another matter: the plant FMU's outputs are computed outside the compiled
+loop and may differ from the loop's own measurement in the last bit, and the loop (stick/slip,
+the valve stem's friction, the dither) carries a last-bit difference into 1e-3 of a signal's
+range within 0.1 s of slip (measured: last-bit differences from the first samples, above
+1e-9 of the range 70 ms after the request). The closed loop of the two FMUs must therefore match
+the native one to 1e-6 through the fill and the hold, up to the request, and give the same launch
+figures.
 """
 
 from __future__ import annotations
@@ -23,7 +31,7 @@ from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
 from wetclutch import params
-from wetclutch.launch import Conditions, simulate
+from wetclutch.launch import Conditions, metrics, simulate
 from wetclutch.launch.controller import MEASURED
 
 TOL = 1e-6  # of each signal's range
@@ -109,12 +117,13 @@ def test_plant_and_controller_fmus_close_the_loop_like_the_native_launch(fmus, t
     ctrl, cv = _slave(fmus["launch"], tmp_path)
     oil, ratio = params.Params().rig.oil_temp_C, params.Params().driveline.ratio
     plant_out = ["p_clutch", "T_r", "omega_p", "omega_1", "omega_r", "omega_s"]
-    u_log, tr_log = np.zeros(n), np.zeros(n)
+    u_log, tr_log, locked = np.zeros(n), np.zeros(n), np.zeros(n)
     try:
         for k in range(n):
             t = k * DT
             y = dict(zip(plant_out, plant.getReal([pv[c] for c in plant_out])))
             tr_log[k] = y["T_r"]
+            locked[k] = float(plant.getBoolean([pv["locked"]])[0])
             t_ref = s["t_ref"].iloc[k]
             y |= {"cvt_ratio": ratio, "oil_temp": oil, "t_ref": t_ref}
             ctrl.setReal([cv[c] for c in (*MEASURED, "t_ref")], [y[c] for c in (*MEASURED, "t_ref")])
@@ -126,8 +135,18 @@ def test_plant_and_controller_fmus_close_the_loop_like_the_native_launch(fmus, t
         for f in (plant, ctrl):
             f.terminate()
             f.freeInstance()
-    _close(u_log, s["u"].to_numpy(), "u")
-    _close(tr_log, truth["T_r"].to_numpy(), "T_r")
+    exact = s["time"].to_numpy() <= Conditions().t_request
+    _close(u_log[exact], s["u"].to_numpy()[exact], "u")
+    _close(tr_log[exact], truth["T_r"].to_numpy()[exact], "T_r")
+    t = s["time"].to_numpy()
+    assert locked[-1] == 1.0  # the FMUs' launch went through synchronisation, and stayed locked
+    t_sync = t[np.flatnonzero(locked == 0.0)[-1] + 1]
+    fmu = metrics.response(t, tr_log, s["t_ref"].to_numpy(), Conditions().t_request, t_sync)
+    native = res.summary
+    assert t_sync == pytest.approx(native["t_sync_s"], abs=0.01)
+    assert fmu.t95_settled_s == pytest.approx(native["t95_settled_s"], abs=0.005)
+    assert fmu.overshoot_pct == pytest.approx(native["overshoot_pct"], abs=1.0)
+    assert fmu.steady_state_error_pct == pytest.approx(native["steady_state_error_pct"], abs=0.5)
 
 
 def test_export_bad_input_is_one_line_and_writes_nothing(tmp_path, cli_refuses):

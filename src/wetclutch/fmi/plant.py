@@ -86,6 +86,7 @@ class Plant:
         self.ext[U_SLOT] = INPUT_RANGE["pwm" if self.pwm else "dc"][0]
         self.ext[LOAD_SLOT] = params.engage.T_load
         self.ws = new_workspace(self.net, x0)
+        self._atol = rn.atol(ATOL)
         net = rn.network
         nc, ng, ns = len(net.clutches), len(net.gears), len(net.springs)
         off = aux_offsets.py_func(nc, ng, ns)
@@ -136,7 +137,7 @@ class Plant:
             raise WetclutchError(f"step must end after the model's time {t:g} s (got {t_stop:g} s)")
         self.ws.istate[IS_SETTLE] = 1
         self.ws.istate[IS_N_OUT] = 0
-        status = advance(self.net, self.ext, self.ws, float(t_stop), float(t_stop - t), t, RTOL, ATOL, np.inf,
+        status = advance(self.net, self.ext, self.ws, float(t_stop), float(t_stop - t), t, RTOL, self._atol, np.inf,
                          *self._out)
         if status != OK:
             raise SimulationError(f"plant step to {t_stop:g} s failed: {failure(self.network, self.ws, status)}")

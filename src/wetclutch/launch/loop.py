@@ -50,11 +50,12 @@ N_CH = len(control.MEASURED)
 #: where the loop finds the measured quantities: state indices (pressure, speeds), the axle spring and the CVT
 #: gear, in the slots of the controller's measured channels (the oil temperature is a constant of the run)
 N_PROBE = N_CH - 1
-#: integration steps (accepted and rejected) a launch may take: a launch takes some 35 thousand; a plant that makes
+#: integration steps (accepted and rejected) a launch may take: a launch takes some 23 thousand; a plant that makes
 #: the engine crawl (a valve stem or clutch chattering between stick and slip) ends as a failed launch, not a hang
 MAX_STEPS = 3_000_000
 #: the default relative tolerance of the plant's integration in a launch (:attr:`Conditions.rtol`)
 RTOL = 1e-5
+#: the absolute tolerance of the plant's integration (the valve stem's speed gets its own: ``RigNetwork.atol``)
 ATOL = 1e-9
 ERR_STEPS = -1
 
@@ -94,7 +95,7 @@ coldstart.register(_cold_jobs)
 
 
 @_jit
-def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, hold, hs, t_ref, dt, t_after, rtol,
+def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, hold, hs, t_ref, dt, t_after, rtol, atol,
                  out_t, out_x, out_aux, out_mode, out_meas, out_u):
     """Run the sampled loop (with a ratio ``hold`` record, the CVT's ratio rate goes to the input slot after
     ``u_slot``); returns (status, number of samples)."""
@@ -116,7 +117,7 @@ def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, ho
         out_u[k] = u
         ext[u_slot] = u
         ws.istate[IS_SETTLE] = 1
-        status = advance(net, ext, ws, (k + 1) * dt, dt, 0.0, rtol, ATOL, np.inf, out_t, out_x, out_aux, out_mode)
+        status = advance(net, ext, ws, (k + 1) * dt, dt, 0.0, rtol, atol, np.inf, out_t, out_x, out_aux, out_mode)
         if status != OK:
             return status, k
         if ws.istate[IS_STEPS] + ws.istate[IS_REJECTED] > MAX_STEPS:
@@ -286,7 +287,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     t_after = cond.t_after + (cond.hold_time if cond.post_sync_hold else 0.0)
     coldstart.begin(net, ext, ws)
     status, m = _closed_loop(net, ext, ws, 0, probe, temp, sensors, noise, ctrl, cs, hold, hs, t_ref, cond.dt,
-                             t_after, cond.rtol, *out, out_meas, out_u)
+                             t_after, cond.rtol, rn.atol(ATOL), *out, out_meas, out_u)
     if status == ERR_STEPS:
         raise SimulationError(f"launch simulation stopped at {m * cond.dt:.3f} s: more than {MAX_STEPS} integration "
                               "steps (the plant chatters between stick and slip)")

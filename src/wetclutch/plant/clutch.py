@@ -33,6 +33,9 @@ from ..sim.network import GROUND, Network, integrate
 from ..sim.signals import Const, Signal
 from . import driveline
 
+#: the valve stem's body in the rig network
+STEM = "stem"
+
 @dataclass(frozen=True)
 class RigNetwork:
     """A rig network and where its measured quantities live in the state vector."""
@@ -48,6 +51,25 @@ class RigNetwork:
     @property
     def i_pressure(self) -> int:
         return self.network.actuator_state + A.PRESSURE
+
+    def atol(self, atol: float) -> np.ndarray:
+        """Absolute tolerances per state for the engine: ``atol`` on every state but the valve stem's speed.
+
+        The stem's speed swings through zero with every reversal of the stem, where an absolute tolerance
+        made for positions would ask for sub-nm/s accuracy and a step of some 0.1 ms. Its error matters only
+        through the stem's position, which a speed error ``dv`` moves by ``dv / r`` at most, ``r`` the
+        stem's fastest rate (``d / m`` or ``sqrt(c / m)``, whichever is larger): the speed gets
+        ``atol * r``, which integrates the position to ``atol``.
+        """
+        net = self.network
+        tol = np.full(net.n_state, float(atol))
+        names = [b.name for b in net.bodies]
+        if STEM in names:
+            i = names.index(STEM)
+            m = net.bodies[i].J
+            sp = next(s for s in net.springs if s.a == i)
+            tol[i] = atol * max(sp.d / m, np.sqrt(sp.k / m))
+        return tol
 
 
 def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str = "clutch", temp_C: float | None = None,
@@ -70,7 +92,7 @@ def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str =
     else:
         net = Network()
         ci = -1
-    stem = net.body("stem", v.m_stem)
+    stem = net.body(STEM, v.m_stem)
     spring = net.spring("stem_spring", stem, GROUND, v.c_stem, v.d_stem)
     net.brake("stem_friction", stem, Const(v.F_friction))
     net.actuator(stem, spring, ci, u, A.pack(params, temp, config), pwm=pwm, pwm_freq=v.pwm_freq)

@@ -74,7 +74,7 @@ def stage(y0, K, h, s, out):
 
 @jit_inline
 def error_norm(y0, y1, K, h, rtol, atol, buf):
-    """RMS of the embedded error estimate scaled by ``atol + rtol |y|``; ``buf`` is scratch.
+    """RMS of the embedded error estimate scaled by ``atol + rtol |y|`` (``atol`` per state); ``buf`` is scratch.
 
     The squares go through ``buf`` so that the divisions run as one vector loop apart from
     the (ordered, hence serial) sum: 25 instead of 45 ns per step.
@@ -82,7 +82,7 @@ def error_norm(y0, y1, K, h, rtol, atol, buf):
     n = y0.shape[0]
     for i in range(n):
         e = _E0 * K[0, i] + _E2 * K[2, i] + _E3 * K[3, i] + _E4 * K[4, i] + _E5 * K[5, i] + _E6 * K[6, i]
-        sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
+        sc = atol[i] + rtol * max(abs(y0[i]), abs(y1[i]))
         r = h * e / sc
         buf[i] = r * r
     acc = 0.0

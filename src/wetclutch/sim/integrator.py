@@ -253,6 +253,8 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
     last grid time. Calling ``advance`` again continues where it stopped (after a
     caller has changed ``ext``, set ``ws.istate[IS_SETTLE] = 1`` to re-decide modes).
 
+    ``atol`` holds one absolute tolerance per state.
+
     Returns a status code (``OK``, ``ERR_SINGULAR``, ``ERR_ZENO``).
     """
     n_grid = out_t.shape[0]

@@ -569,7 +569,7 @@ def integrate(
     t_end: float,
     dt_out: float = 1e-3,
     rtol: float = 1e-8,
-    atol: float = 1e-10,
+    atol: float | np.ndarray = 1e-10,
     h_max: float = np.inf,
 ) -> Trajectory:
     """Integrate ``network`` from 0 to ``t_end``, sampling every ``dt_out`` seconds.
@@ -577,7 +577,8 @@ def integrate(
     Parameters
     ----------
     rtol, atol
-        Local error tolerances of the Dormand-Prince 5(4) step control.
+        Local error tolerances of the Dormand-Prince 5(4) step control; ``atol`` is one for every
+        state or one per state (:attr:`Network.n_state` of them).
     h_max
         Largest step, s.
     """
@@ -586,10 +587,14 @@ def integrate(
     if not 0.0 < dt_out <= t_end:
         raise ValueError("dt_out must be in (0, t_end]")
     net, x0, ext = network.compile()
+    tol = np.asarray(atol, dtype=np.float64)
+    if tol.ndim > 1 or tol.size not in (1, x0.size) or not np.all(tol > 0.0):
+        raise ValueError(f"atol must be > 0, one value or one per state ({x0.size})")
+    tol = np.full(x0.size, tol) if tol.ndim == 0 else tol.copy()
     ws = wsp.new_workspace(net, x0)
     coldstart.begin(net, ext, ws)
     out = outputs(int(round(t_end / dt_out)) + 1, x0.size, ws.aux.size, len(network.clutches))
-    status = advance(net, ext, ws, float(t_end), float(dt_out), 0.0, rtol, atol, h_max, *out)
+    status = advance(net, ext, ws, float(t_end), float(dt_out), 0.0, rtol, tol, h_max, *out)
     if status != wsp.OK:
         raise failure(network, ws, status)
     return Trajectory.from_run(network, ws, *out)
