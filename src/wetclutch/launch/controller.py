@@ -183,6 +183,10 @@ SEARCH_LEAD = 0.3e5
 CONTACT_JUMP = 0.1e5
 #: time constant (s) with which a steady creep pulls the believed kiss point down to the one it shows
 TAU_CREEP_KISS = 0.1
+#: cold oil's drag alone may take most of the creep allowed: the plates then may add no more than PLATE_NM (N m) once
+#: the creep exceeds this share of ``creep_limit``
+CREEP_SHARE = 0.8
+PLATE_NM = 1.0
 #: the hold's pressure this far (Pa) above its set point is trapped: the stem sits in its overlap and the magnet
 #: on its rising branch, and the drain opens only once the input has crossed the play
 TRAPPED = 0.05e5
@@ -416,7 +420,8 @@ def _watch_creep(ctrl, cs, meas, dt):
     excess = cs[CS_TF] - cs[CS_TMIN]
     if abs(cs[CS_PF5] - cs[CS_PF]) < ARM_RISE:
         seen = _kiss_under(ctrl, meas, cs[CS_PF], excess)
-        if (excess > ctrl[CREEP_LIMIT] and seen < cs[CS_KISS]) or seen > cs[CS_KISS] + ctrl[HOLD_OFFSET]:
+        creeping = excess > ctrl[CREEP_LIMIT] or (cs[CS_TF] > CREEP_SHARE * ctrl[CREEP_LIMIT] and excess > PLATE_NM)
+        if (creeping and seen < cs[CS_KISS]) or seen > cs[CS_KISS] + ctrl[HOLD_OFFSET]:
             cs[CS_KISS] += (seen - cs[CS_KISS]) * dt / (TAU_CREEP_KISS + dt)
 
 
