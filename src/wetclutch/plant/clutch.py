@@ -33,8 +33,9 @@ from ..sim.network import GROUND, Network, integrate
 from ..sim.signals import Const, Signal
 from . import driveline
 
-#: the valve stem's body in the rig network
-STEM = "stem"
+#: the valve stem's body and its spring (to the housing, with the stem's damping) in the rig network
+STEM, STEM_SPRING = "stem", "stem_spring"
+
 
 @dataclass(frozen=True)
 class RigNetwork:
@@ -63,12 +64,10 @@ class RigNetwork:
         """
         net = self.network
         tol = np.full(net.n_state, float(atol))
-        names = [b.name for b in net.bodies]
-        if STEM in names:
-            i = names.index(STEM)
-            m = net.bodies[i].J
-            sp = next(s for s in net.springs if s.a == i)
-            tol[i] = atol * max(sp.d / m, np.sqrt(sp.k / m))
+        i = [b.name for b in net.bodies].index(STEM)
+        m = net.bodies[i].J
+        sp = next(s for s in net.springs if s.name == STEM_SPRING)
+        tol[i] = atol * max(sp.d / m, np.sqrt(sp.k / m))
         return tol
 
 
@@ -93,7 +92,7 @@ def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str =
         net = Network()
         ci = -1
     stem = net.body(STEM, v.m_stem)
-    spring = net.spring("stem_spring", stem, GROUND, v.c_stem, v.d_stem)
+    spring = net.spring(STEM_SPRING, stem, GROUND, v.c_stem, v.d_stem)
     net.brake("stem_friction", stem, Const(v.F_friction))
     net.actuator(stem, spring, ci, u, A.pack(params, temp, config), pwm=pwm, pwm_freq=v.pwm_freq)
     return RigNetwork(net, config, temp)

@@ -169,7 +169,7 @@ def _truth(tr: Trajectory, rn: clutch.RigNetwork, s: Settings, u: Signal) -> pd.
         "time": tr.t,
         "u": _sample(u, tr.t),
         "coil_current": tr.x[:, rn.i_current],
-        "x_stem": tr.x[:, len(net.bodies) + next(i for i, sp in enumerate(net.springs) if sp.name == "stem_spring")],
+        "x_stem": tr.x[:, len(net.bodies) + [sp.name for sp in net.springs].index(clutch.STEM_SPRING)],
         "x_piston": x_p,
         "p_clutch": p,
         "F_n": f_n,
