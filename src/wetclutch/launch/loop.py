@@ -149,10 +149,10 @@ class Conditions:
         Relative tolerance of the plant's integration between controller samples. The closed loop
         (stick/slip, a valve stem with friction, sensor noise) carries any change at rounding level
         into shifts of a few ms: a launch at 1e-6 ends its slip up to 5 ms apart from one at 1e-8. At
-        the default 1e-5 a launch's figures equal those at 1e-8 as closely (t95 and lock-up within
-        1.3 ms, overshoot within 0.01 points), and the figures of 800 sampled clutches are distributed
-        as at 1e-6, in three quarters of the steps. At 1e-4 a sustained oscillation came out with a
-        third less amplitude: too loose.
+        the default 1e-5 a launch's figures equal those at 1e-8 as closely (t95 within 2 ms, lock-up
+        within 1.4 ms, overshoot within 0.05 points), and the figures of 800 sampled clutches are
+        distributed as at 1e-6, in two thirds of the steps. At 1e-4 a sustained oscillation came out
+        with a third less amplitude: too loose.
     """
 
     t_ref: float = 100.0
