@@ -144,8 +144,8 @@ N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power 
 # --- controller state
 (CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED, CS_KISS,
  CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF, CS_THETA_START, CS_THETA_N, CS_THETA_LEARNT, CS_DPF,
- CS_PPREV, CS_TMIN, CS_REF1, CS_ANSWERED, CS_TREQ) = range(28)
-N_CS = 28
+ CS_PPREV, CS_TMIN, CS_REF1, CS_ANSWERED, CS_TREQ, CS_KISS_LEARNT) = range(29)
+N_CS = 29
 #: time constant of the filtered derivative of the measured pressure (s): it passes the valve's own pressure
 #: oscillation (20 to 40 Hz) and smooths the sensor's noise
 TAU_DP = 0.002
@@ -178,6 +178,10 @@ SEARCH_SPAN = 0.6e5
 #: the lead alone opens the valve: at 0.1 bar a stroke left 0.25 bar short by the fill crawled at 0.2 bar/s and the
 #: plates were still open at the request
 SEARCH_LEAD = 0.3e5
+#: a kiss point learnt on earlier launches is searched above only once the pressure has come this close to it (Pa):
+#: the piston may still stroke slowly (cold oil), and a belief raised ahead of the stroke leads the set point and
+#: opens the valve, which slams the pressure up when the plates stop the piston
+SEARCH_NEAR = 0.02e5
 #: a jump of the filtered pressure this far above the hold pressure in the hold: the plates have stopped the
 #: piston and the valve, open for the stroke's flow, has trapped the pressure high (Pa)
 CONTACT_JUMP = 0.1e5
@@ -389,8 +393,10 @@ def _find_kiss(ctrl, cs, meas, t_ref, phase, dt):
     The steep pressure rise at contact (:data:`JUMP`) places it where the stroke's pressure ended; a gentle
     approach, which has no such rise, is placed by the torque onset (the filtered ``T_r`` above
     :data:`ONSET_NM`): the measured pressure less what the nominal friction law needs for that torque. A clutch that holds at the believed kiss point without any
-    torque has it higher: the belief then rises at :data:`SEARCH_RATE` until the torque comes. Before it is
-    found, the kiss point is the one learnt on earlier launches (the loop sets it) or the design's.
+    torque has it higher: the belief then rises at :data:`SEARCH_RATE` until the torque comes, once the pressure is
+    within :data:`SEARCH_LEAD` of the design's kiss point or within :data:`SEARCH_NEAR` of a learnt one (which is
+    seldom far off, while a slow stroke in cold oil is still short of it). Before it is found, the kiss point is
+    the one learnt on earlier launches (the loop sets it and ``CS_KISS_LEARNT``) or the design's.
     """
     if cs[CS_FOUND] != 0.0:
         return
@@ -405,7 +411,8 @@ def _find_kiss(ctrl, cs, meas, t_ref, phase, dt):
     elif phase != FILL and cs[CS_TF] - cs[CS_TREF] > ONSET_NM:
         cs[CS_KISS] = _kiss_under(ctrl, meas, cs[CS_PF], ONSET_NM)
         cs[CS_FOUND] = 1.0
-    elif phase == HOLD and t_ref <= 0.0 and cs[CS_DIP] <= 0.0 and cs[CS_PF] > cs[CS_KISS] - SEARCH_LEAD:
+    elif (phase == HOLD and t_ref <= 0.0 and cs[CS_DIP] <= 0.0
+          and cs[CS_PF] > cs[CS_KISS] - (SEARCH_NEAR if cs[CS_KISS_LEARNT] != 0.0 else SEARCH_LEAD)):
         cs[CS_KISS] = min(cs[CS_KISS] + SEARCH_RATE * dt, ctrl[P_KISS] + SEARCH_SPAN)
 
 

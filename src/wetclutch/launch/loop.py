@@ -282,6 +282,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     learnt = adaptation or Adaptation()
     start = learnt.kiss(temp) if d.kind == "launch" else None
     cs[control.CS_KISS] = d.settings["p_kiss"] if start is None else start
+    cs[control.CS_KISS_LEARNT] = float(start is not None)
     if d.kind == "launch":
         cs[control.CS_THETA_START] = learnt.friction_factor(temp) or 0.0
     t_after = cond.t_after + (cond.hold_time if cond.post_sync_hold else 0.0)
