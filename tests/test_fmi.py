@@ -155,3 +155,23 @@ def test_export_bad_input_is_one_line_and_writes_nothing(tmp_path, cli_refuses):
     r = cli_refuses(["export-fmu"], "--out", tmp_path / "c.zip")
     assert "c.zip" in r.stderr
     assert not [p for p in tmp_path.iterdir()]  # no temporary left behind
+
+
+def test_the_controller_started_from_a_learnt_kiss_point_acts_as_the_native_loop_does():
+    # a clutch whose kiss point lies 0.1 bar above the design's, in cold oil: the second launch starts from the kiss
+    # point the first one learnt. Fed the second launch's measurements, the exported controller (started from that
+    # kiss point and friction factor) must give the native loop's input at every sample, the search of a learnt kiss
+    # point included
+    from wetclutch.fmi.controller import Controller
+    from wetclutch.launch import design, loop
+
+    base = params.Params()
+    plant = params.load(overrides={"hydraulics.p_prestress": base.hydraulics.p_prestress + 0.1e5})
+    d = design.cached(base, "launch")
+    runs = loop.sequence(plant, d, Conditions(t_ref=100.0, oil_temp_C=20.0), 2)
+    learnt = runs[1].summary["kiss_start_Pa"]
+    assert learnt != d.settings["p_kiss"]
+    ctrl = Controller(design.record(d, DT), learnt, runs[1].summary["friction_factor_start"])
+    sg = runs[1].signals
+    u = [ctrl.step(dict(zip(MEASURED, row)), r) for row, r in zip(sg[list(MEASURED)].to_numpy(), sg["t_ref"])]
+    assert np.array_equal(np.array(u), sg["u"].to_numpy())

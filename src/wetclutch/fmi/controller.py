@@ -29,14 +29,20 @@ class Controller:
         The controller's flat record (:func:`wetclutch.launch.design.record`).
     kiss_Pa
         The kiss point the controller starts from, Pa: the design's, or one learnt in earlier
-        launches (:class:`wetclutch.launch.adaptation.Adaptation`).
+        launches (:class:`wetclutch.launch.adaptation.Adaptation`). A learnt one (any other than the
+        design's) is searched above only once the pressure has come close to it, as in the native loop.
+    friction_factor
+        The friction factor learnt in earlier launches at this oil temperature, if any: the torque loop's
+        friction law starts from it instead of the design's.
     """
 
-    def __init__(self, record: np.ndarray, kiss_Pa: float) -> None:
+    def __init__(self, record: np.ndarray, kiss_Pa: float, friction_factor: float | None = None) -> None:
         self.record = np.asarray(record, dtype=float)
         self.dt = float(self.record[control.DT])
         self.state = np.zeros(control.N_CS)
         self.state[control.CS_KISS] = kiss_Pa
+        self.state[control.CS_KISS_LEARNT] = float(kiss_Pa != self.record[control.P_KISS])
+        self.state[control.CS_THETA_START] = friction_factor or 0.0
 
     @classmethod
     def of(cls, d: design.Design, dt: float = 1e-3) -> Controller:
