@@ -56,7 +56,10 @@ def test_lock_up_is_found_for_a_small_request_that_locks_late():
 def test_signals_carry_the_rig_channels_request_and_input(nominal):
     sig = nominal.signals
     assert list(sig.columns) == ["time", *control.MEASURED, "t_ref", "u"]
-    assert np.all((sig.u >= 0.2) & (sig.u <= 5.0))  # within the rig's DC input range
+    # the fill starts at the top of the rig's DC input range; the hold waits far below it
+    assert np.all(sig.u[sig.time < 0.02] == 5.0)
+    hold = sig.u[(sig.time > 0.5) & (sig.time < 1.0)]
+    assert 0.2 < hold.min() and hold.max() < 2.0
     assert np.all(sig.t_ref[sig.time < 1.0] == 0.0) and np.all(sig.t_ref[sig.time >= 1.0] == 100.0)
     # the run stops t_after after the final lock
     assert sig.time.iloc[-1] == pytest.approx(nominal.summary["t_sync_s"] + 0.5, abs=5e-3)
