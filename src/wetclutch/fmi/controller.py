@@ -39,10 +39,7 @@ class Controller:
     def __init__(self, record: np.ndarray, kiss_Pa: float, friction_factor: float | None = None) -> None:
         self.record = np.asarray(record, dtype=float)
         self.dt = float(self.record[control.DT])
-        self.state = np.zeros(control.N_CS)
-        self.state[control.CS_KISS] = kiss_Pa
-        self.state[control.CS_KISS_LEARNT] = float(kiss_Pa != self.record[control.P_KISS])
-        self.state[control.CS_THETA_START] = friction_factor or 0.0
+        self.state = control.initial_state(kiss_Pa, kiss_Pa != self.record[control.P_KISS], friction_factor)
 
     @classmethod
     def of(cls, d: design.Design, dt: float = 1e-3) -> Controller:

@@ -567,6 +567,26 @@ def _common(r: np.ndarray, kind: int, dt: float, u_range: tuple[float, float]) -
     return r
 
 
+def initial_state(kiss_Pa: float, learnt: bool = False, friction_factor: float | None = None) -> np.ndarray:
+    """The controller's state before a launch.
+
+    Parameters
+    ----------
+    kiss_Pa
+        The kiss point the launch starts from, Pa.
+    learnt
+        Whether ``kiss_Pa`` was learnt on earlier launches (searched above only once the pressure has come
+        within :data:`SEARCH_NEAR` of it) rather than the design's.
+    friction_factor
+        The friction factor learnt on earlier launches at this oil temperature, if any.
+    """
+    cs = np.zeros(N_CS)
+    cs[CS_KISS] = kiss_Pa
+    cs[CS_KISS_LEARNT] = float(learnt)
+    cs[CS_THETA_START] = friction_factor or 0.0
+    return cs
+
+
 def pack(kind: str, s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pressures: np.ndarray, table: np.ndarray,
          fill: np.ndarray, dt: float, u_range: tuple[float, float]) -> np.ndarray:
     """A controller's record (``kind`` one of :data:`CONTROLLERS`).

@@ -278,13 +278,10 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     out = outputs(n, x0.size, ws.aux.size, len(rn.network.clutches))
     out_meas = np.zeros((n, N_CH))
     out_u = np.zeros(n)
-    cs = np.zeros(control.N_CS)
     learnt = adaptation or Adaptation()
     start = learnt.kiss(temp) if d.kind == "launch" else None
-    cs[control.CS_KISS] = d.settings["p_kiss"] if start is None else start
-    cs[control.CS_KISS_LEARNT] = float(start is not None)
-    if d.kind == "launch":
-        cs[control.CS_THETA_START] = learnt.friction_factor(temp) or 0.0
+    cs = control.initial_state(d.settings["p_kiss"] if start is None else start, start is not None,
+                               learnt.friction_factor(temp) if d.kind == "launch" else None)
     t_after = cond.t_after + (cond.hold_time if cond.post_sync_hold else 0.0)
     coldstart.begin(net, ext, ws)
     status, m = _closed_loop(net, ext, ws, 0, probe, temp, sensors, noise, ctrl, cs, hold, hs, t_ref, cond.dt,
