@@ -305,7 +305,7 @@ def _cmd_identify(args: argparse.Namespace) -> None:
         bar.update(task, description=f"writing {args.out}")
         identify_report.write(res, args.out)
     e = res.estimates
-    found = ", ".join(k for k in ("mu_slip_poly", "contact_pressure_Pa", "valve_gain", "clutch_gain_poly_bar_per_V",
+    found = ", ".join(k for k in ("mu_slip_poly", "contact_pressure_Pa", "stroke_start_Pa", "valve_gain", "clutch_gain_poly_bar_per_V",
                                   "resonance_Hz", "ratio", "J_p", "J_1", "J_s") if k in e)
     print(f"identify: {len(recs)} files, {len(res.onsets)} onsets, {len(res.steps)} step models, "
           f"{len(res.responses)} frequency responses; {found or 'nothing'} -> {args.out}")

@@ -11,6 +11,10 @@ from .estimate import aligned, robust_std
 from .recordings import Recording, command_changes
 
 
+#: samples of a stroke (command step to torque onset) below which its start is not estimated
+MIN_STROKE_SAMPLES = 30
+
+
 @dataclass(frozen=True)
 class Onset:
     """Torque onset after a rising command step of one clutch run."""
@@ -21,6 +25,8 @@ class Onset:
     dead_time_se: float
     p_contact: float
     p_contact_se: float
+    p_start: float  # pressure at which the piston starts to stroke (the reset spring's prestress), Pa; NaN: not seen
+    p_start_se: float
     level: float  # command after the step
     baseline: float  # T_r before the onset (oil drag through the CVT), N m
     noise: float  # T_r noise, N m
@@ -36,7 +42,8 @@ def onset(rec: Recording) -> Onset | None:
     volume is stiff), so the pressure at the onset is the end of the slow stroke
     phase: a straight line fitted to the pressure from 60 ms to 5 ms before the
     onset (clear of the jump) and evaluated at the onset. This avoids reading the pressure on its steep flank,
-    where one sample of jitter would be worth tenths of a bar.
+    where one sample of jitter would be worth tenths of a bar. The stroke's start (:func:`stroke_start`) gives
+    the pressure at which the piston starts to move.
     """
     if rec.config != "clutch" or rec.experiment != "step":
         return None
@@ -65,5 +72,38 @@ def onset(rec: Recording) -> Onset | None:
     t_se = float(np.hypot(dt / np.sqrt(12.0), noise / max(slope_T, 1e-9)))
     slip = d["omega_p"] - d["omega_1"]
     level = float(u[min(k_cmd + 5, t.size - 1)])
-    return Onset(rec, float(t[k_cmd]), t_on - float(t[k_cmd]), t_se, p_c, p_c_se, level, base, noise,
+    p_s, p_s_se = stroke_start(t, p, k_cmd, t_on, p_c)
+    return Onset(rec, float(t[k_cmd]), t_on - float(t[k_cmd]), t_se, p_c, p_c_se, p_s, p_s_se, level, base, noise,
                  float(np.median(slip[pre])))
+
+
+def stroke_start(t: np.ndarray, p: np.ndarray, k_cmd: int, t_on: float, p_contact: float) -> tuple[float, float]:
+    """Pressure (Pa) at which the piston starts to stroke after the command step at ``k_cmd``, and its standard
+    error; NaN where the stroke is too short to show it.
+
+    Before the piston moves, the inflow fills only the chamber's small dead volume and the pressure rises
+    within milliseconds to the reset spring's prestress over the piston area; through the stroke it then
+    ramps with the spring's deflection, slowly and nearly linearly, up to the contact pressure. A straight
+    line through the middle half of the stroke (clear of that first rise and of the contact's jump) is followed back to the first rise's
+    midpoint (the pressure halfway between its level before the step and the line): its value there is the
+    start of the stroke. The midpoint of a rise of tenths of a bar within milliseconds is placed to a sample
+    whatever the sensor's noise, where the first sample to reach the line itself would not be.
+    """
+    idx = np.flatnonzero((t > t[k_cmd]) & (t < t_on - 0.005))
+    if idx.size < MIN_STROKE_SAMPLES:
+        return float("nan"), float("nan")
+    late = idx[idx.size // 4:3 * idx.size // 4]  # clear of the first rise and of the contact's jump
+    coef, cov = np.polyfit(t[late] - t[late[0]], p[late], 1, cov=True)
+    line = np.polyval(coef, t[idx] - t[late[0]])
+    before = float(np.median(p[max(k_cmd - 50, 0):k_cmd + 1]))
+    met = np.flatnonzero(p[idx] >= 0.5 * (before + line))
+    if met.size == 0 or met[0] >= idx.size // 4:
+        return float("nan"), float("nan")  # no quick rise onto a ramp: not a stroke this record shows
+    k = int(met[0])
+    value = float(line[k])
+    if not 0.0 < value < p_contact or coef[0] <= 0.0:
+        return float("nan"), float("nan")
+    dt_k = t[idx[k]] - t[late[0]]
+    se = float(np.sqrt(cov[1, 1] + dt_k * dt_k * cov[0, 0] + 2.0 * dt_k * cov[0, 1]))
+    # where on the first rise the line is met is uncertain by a sample, in which the ramp moves on
+    return value, float(np.hypot(se, coef[0] * (t[1] - t[0])))

@@ -6,7 +6,9 @@ standard error and the files and time windows it came from (an :class:`Estimate`
 or a small record per run). :func:`identify` runs all estimators that the
 recordings support:
 
-* torque onset after a command step: dead time and contact pressure (:func:`onset`);
+* torque onset after a command step: dead time and contact pressure (:func:`onset`), and the
+  pressure at which the piston's stroke starts (``stroke_start_Pa``, the reset spring's prestress;
+  reported beside the prior's, which the parameter set keeps);
 * the CVT ratio from the speeds (:func:`measured_ratio`); where the CVT input turns
   too slowly for the speed sensors, the ratio the rig was set to (``meta.json``) or
   the prior's, noted as such;
@@ -96,6 +98,11 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
         m, se = weighted_mean(np.array([o.p_contact for o in onsets]), np.array([o.p_contact_se for o in onsets]))
         est["contact_pressure_Pa"] = Estimate(m, se, "Pa", [source(o.rec, o.t_command, o.t_command + o.dead_time)
                                                             for o in onsets])
+        starts = [o for o in onsets if np.isfinite(o.p_start)]
+        if starts:
+            m, se = weighted_mean(np.array([o.p_start for o in starts]), np.array([o.p_start_se for o in starts]))
+            est["stroke_start_Pa"] = Estimate(m, se, "Pa", [source(o.rec, o.t_command, o.t_command + o.dead_time)
+                                                            for o in starts])
     p_contact = est["contact_pressure_Pa"].value if onsets else actuator.contact_pressure(prior)
     by_rec = {id(o.rec): o for o in onsets}
     clutch_runs = [r for r in recordings if r.config == "clutch"]

@@ -63,7 +63,8 @@ def resonance(rec: Recording, slip_tol: float = 2.0, min_window: float = 0.8) ->
     A = np.column_stack([np.ones_like(tau), tau, env * np.cos(om0 * tau), -env * np.sin(om0 * tau)])
     lin = np.linalg.lstsq(A, yy, rcond=None)[0]
     x0 = [lin[0], lin[1], float(np.hypot(lin[2], lin[3])), s0, om0, float(np.arctan2(lin[3], lin[2]))]
-    best = least_squares(lambda x: model(x) - yy, x0, x_scale="jac", max_nfev=300)
+    with np.errstate(over="ignore", invalid="ignore"):  # the solver's cost of such a trial step overflows too
+        best = least_squares(lambda x: model(x) - yy, x0, x_scale="jac", max_nfev=300)
     s, om = best.x[3], abs(best.x[4])  # decay rate and angular frequency; the sign of om is the phase's
     resid = best.fun
     cov = np.linalg.pinv(best.jac.T @ best.jac) * float(resid @ resid) / max(tt.size - 6, 1) * inflation(resid)

@@ -71,8 +71,10 @@ def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
         lines.append(f"| {name} | {_pm(est.value, est.se)} | {est.unit} | {len(files)} file(s) |")
     if result.onsets:
         lines += ["", "### Dead time and contact pressure per run", "",
-                  "| file | oil temp [C] | input | dead time [s] | contact pressure [bar] |", "|---|---|---|---|---|"]
+                  "| file | oil temp [C] | input | dead time [s] | stroke start [bar] | contact pressure [bar] |",
+                  "|---|---|---|---|---|---|"]
         lines += [f"| {o.rec.path} | {o.rec.oil_temp_C:.1f} | {o.level:g} | {o.dead_time:.4f} ± {o.dead_time_se:.1g} | "
+                  f"{o.p_start / BAR:.3f} ± {o.p_start_se / BAR:.1g} | "
                   f"{o.p_contact / BAR:.3f} ± {o.p_contact_se / BAR:.1g} |" for o in result.onsets]
     if result.steps:
         lines += ["", "### Pressure models fitted to steps and relaxations", "",
