@@ -183,16 +183,17 @@ def test_a_stroke_too_short_to_show_gives_no_start():
     assert np.isnan(value) and np.isnan(se)
 
 
-def test_a_prestress_unlike_the_prior_is_estimated_from_the_stroke(tmp_path):
-    """Prestress 0.8 bar (prior 0.5) and a stroke of 1.2 mm: the stroke's start shows the prestress, which the
-    contact pressure alone does not."""
+def test_a_prestress_unlike_the_prior_is_identified_and_the_stroke_follows(tmp_path):
+    """Prestress 0.8 bar (prior 0.5) and a stroke of 1.2 mm: the contact pressure alone, read with the prior's
+    prestress, would put the stroke at 3.2 mm, and the fill's volume with it."""
     true = {**TRUE, "hydraulics.p_prestress": 0.8e5, "hydraulics.x_contact": 1.2e-3}
     res = ident.identify(_rig_runs(tmp_path, true, CLUTCH_STEPS))
+    h = params.load(overrides=true).hydraulics
     start = res.estimates["stroke_start_Pa"]
-    assert start.value == pytest.approx(0.8e5, abs=max(4.0 * start.se, 0.03e5))
-    assert res.as_json()["stroke_start_Pa"]["value"] == start.value
-    # reported, not applied: the parameter set keeps the prior's prestress (see the identification report)
-    assert res.identified.hydraulics.p_prestress == res.prior.hydraulics.p_prestress
+    assert start.value == pytest.approx(h.p_prestress, abs=max(4.0 * start.se, 0.03e5))
+    assert res.identified.hydraulics.p_prestress == start.value
+    assert res.identified.hydraulics.x_contact == pytest.approx(h.x_contact, rel=0.15)
+    assert res.sources()["hydraulics.p_prestress"][0] == "identified"
 
 
 @pytest.fixture(scope="module")

@@ -7,8 +7,8 @@ or a small record per run). :func:`identify` runs all estimators that the
 recordings support:
 
 * torque onset after a command step: dead time and contact pressure (:func:`onset`), and the
-  pressure at which the piston's stroke starts (``stroke_start_Pa``, the reset spring's prestress;
-  reported beside the prior's, which the parameter set keeps);
+  pressure at which the piston's stroke starts (``stroke_start_Pa``: the reset spring's prestress, and
+  with the contact pressure the piston's travel to the plates, the fill volume);
 * the CVT ratio from the speeds (:func:`measured_ratio`); where the CVT input turns
   too slowly for the speed sensors, the ratio the rig was set to (``meta.json``) or
   the prior's, noted as such;

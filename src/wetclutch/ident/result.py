@@ -34,6 +34,7 @@ PARAMS_FROM = {
     "driveline.J_s": "J_s",
     "driveline.k_a": "resonance_Hz",
     "driveline.d_a": "damping_ratio",
+    "hydraulics.p_prestress": "stroke_start_Pa",
     "hydraulics.x_contact": "contact_pressure_Pa",
     "rig.oil_temp_C": "oil_temp_C",
 }
@@ -44,6 +45,7 @@ _NEEDS = {
     "resonance_Hz": "a ring-out of at least 0.8 s after synchronisation",
     "damping_ratio": "a ring-out of at least 0.8 s after synchronisation",
     "contact_pressure_Pa": "a torque onset after a rising command step of a clutch run",
+    "stroke_start_Pa": "a rising command step of a clutch run from an empty clutch, its stroke long enough to show",
 }
 
 
@@ -122,8 +124,9 @@ def identified_values(prior: Params, est: dict[str, Estimate],
     """Dotted parameter path -> identified value, for the parameters the estimates determine.
 
     ``friction.mu_slip_poly`` (``mu_scale`` 1), ``driveline.ratio``, the inertias
-    ``driveline.J_p``, ``J_1``, ``J_s``, ``rig.oil_temp_C``, ``hydraulics.x_contact``
-    (from the contact pressure, keeping the prior prestress, spring and piston area),
+    ``driveline.J_p``, ``J_1``, ``J_s``, ``rig.oil_temp_C``, ``hydraulics.p_prestress`` (the pressure at which
+    the stroke starts), ``hydraulics.x_contact`` (from the contact pressure above that prestress, or the
+    prior's, with the prior's spring and piston area: the stroke that the pressure's span implies),
     ``driveline.k_a`` and ``d_a`` (from resonance and damping with the ratio and the
     inertias, identified or else from ``fallback`` or the prior, through the relation
     in :mod:`wetclutch.params`).
@@ -142,8 +145,13 @@ def identified_values(prior: Params, est: dict[str, Estimate],
     if "oil_temp_C" in est:
         sets["rig.oil_temp_C"] = float(np.clip(est["oil_temp_C"].value, *OIL_TEMP_RANGE_C))
     h = prior.hydraulics
-    if "contact_pressure_Pa" in est and est["contact_pressure_Pa"].value > h.p_prestress:
-        sets["hydraulics.x_contact"] = (est["contact_pressure_Pa"].value - h.p_prestress) * h.A_p / h.k_reset
+    p_start = h.p_prestress
+    if "stroke_start_Pa" in est and (
+            "contact_pressure_Pa" not in est or est["stroke_start_Pa"].value < est["contact_pressure_Pa"].value):
+        p_start = float(est["stroke_start_Pa"].value)
+        sets["hydraulics.p_prestress"] = p_start
+    if "contact_pressure_Pa" in est and est["contact_pressure_Pa"].value > p_start:
+        sets["hydraulics.x_contact"] = (est["contact_pressure_Pa"].value - p_start) * h.A_p / h.k_reset
     if "resonance_Hz" in est:
         zeta = est["damping_ratio"].value if "damping_ratio" in est else None
         plant = prior.model_copy(update={"driveline": prior.driveline.model_copy(update=inertias)})
