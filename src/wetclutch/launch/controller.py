@@ -53,7 +53,9 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       0.2 s, so the controller also estimates a friction factor ``theta`` (the
       measured ``T_r`` over the nominal model's torque at the measured pressure,
       low-pass filtered) and scales its friction law by it: an adaptive
-      feedforward. An integrator on the torque error removes what is left
+      feedforward. While the clutch output swings back (a heavy one at a low CVT
+      ratio rings against the axle at a few Hz), that filter slows down: following
+      the axle torque's swing, the estimate would keep the ringing up. An integrator on the torque error removes what is left
       (efficiency, kiss-point error). The slip in ``mu(slip)`` comes from the
       primary and secondary flywheels, whose speeds are smooth.
     * **Dither.** In DC mode nothing shakes the valve stem, whose friction then
@@ -144,8 +146,8 @@ N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power 
 # --- controller state
 (CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED, CS_KISS,
  CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF, CS_THETA_START, CS_THETA_N, CS_THETA_LEARNT, CS_DPF,
- CS_PPREV, CS_TMIN, CS_REF1, CS_ANSWERED, CS_TREQ, CS_KISS_LEARNT) = range(29)
-N_CS = 29
+ CS_PPREV, CS_TMIN, CS_REF1, CS_ANSWERED, CS_TREQ, CS_KISS_LEARNT, CS_W1PEAK, CS_W1DROP) = range(31)
+N_CS = 31
 #: time constant of the filtered derivative of the measured pressure (s): it passes the valve's own pressure
 #: oscillation (20 to 40 Hz) and smooths the sensor's noise
 TAU_DP = 0.002
@@ -153,6 +155,15 @@ TAU_DP = 0.002
 #: the value is taken: early in the slip phase, at the slip at which the next launch's response is made
 THETA_LEARN_N = 50
 THETA_LEARN_AT = 300
+#: the clutch output's speed swinging back (its fall below the highest speed of the slip phase so far, rad/s, held
+#: and decaying with W1_DROP_TAU s) shows the clutch output ringing against the axle: a heavy clutch output at a
+#: low CVT ratio rings at a few Hz, where the friction-factor estimate, driven by the axle torque's swing, closes
+#: an unstable loop. Its time constant grows by W1_DROP_SCALE per rad/s of swing beyond W1_DROP_DEAD, at most to
+#: W1_DROP_MAX times its own. A launch without ringing sees the speed rise and the estimate unchanged.
+W1_DROP_DEAD = 6.0
+W1_DROP_SCALE = 0.2
+W1_DROP_MAX = 3.0
+W1_DROP_TAU = 0.3
 #: samples of a calm, risen pressure (above ARM_P, rising less than ARM_RISE) before a steep rise counts as contact:
 #: the jump from empty to the reset spring's prestress at the start of the fill is not one; the stroke's ramp is calm
 ARM_N = 20
@@ -268,7 +279,8 @@ def _friction_estimate(ctrl, cs, meas, p, slip, dt):
     if f_n > ctrl[F_KNEE] * 1.5:
         t_model = ctrl[ETA] / _ratio(ctrl, meas) * _mu(ctrl, slip) * f_n * friction.knee(f_n, ctrl[F_KNEE])
         theta = min(max(meas[M_TR] / t_model, 0.5), 2.0)
-        cs[CS_THETA] += (theta - cs[CS_THETA]) * dt / (ctrl[TAU_THETA] + dt)
+        slow = min(1.0 + W1_DROP_SCALE * max(cs[CS_W1DROP] - W1_DROP_DEAD, 0.0), W1_DROP_MAX)
+        cs[CS_THETA] += (theta - cs[CS_THETA]) * dt / (ctrl[TAU_THETA] * slow + dt)
         cs[CS_THETA_N] += 1.0
         if cs[CS_THETA_N] <= THETA_LEARN_AT:
             cs[CS_THETA_LEARNT] = cs[CS_THETA]
@@ -308,6 +320,8 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     # with the clutch torque, and feeding that back through mu(slip) closes a fast loop
     ratio = _ratio(ctrl, meas)
     slip = meas[M_WP] - meas[M_WS] / ratio
+    cs[CS_W1PEAK] = max(cs[CS_W1PEAK], meas[M_W1])
+    cs[CS_W1DROP] = max(cs[CS_W1PEAK] - meas[M_W1], cs[CS_W1DROP] * (1.0 - dt / W1_DROP_TAU))
     _friction_estimate(ctrl, cs, meas, p, slip, dt)
     th = cs[CS_THETA]
     p_r = _pressure_target(ctrl, cs[CS_KISS], r, slip, th, ratio)
