@@ -84,7 +84,9 @@ def test_the_launch_loops_margins_predict_where_the_simulated_launch_oscillates(
     plant = Params().model_copy(deep=True)
     plant.driveline.J_1 *= 10.0
     plant.driveline.ratio = 0.4
-    fast = designs.with_settings(designs.cached(Params(), "launch"), tau_theta=0.01)
+    # fast enough that the estimate's slowing while the clutch output swings back (threefold at most) leaves it
+    # beyond its margin: at 0.01 s that slowing damps the ringing out
+    fast = designs.with_settings(designs.cached(Params(), "launch"), tau_theta=0.005)
     slow = designs.cached(Params(), "launch")
     cond = loop.Conditions(t_ref=150.0, oil_temp_C=60.0)
     m_fast = margins.launch_margins(fast, plant, 60.0, 150.0)
