@@ -84,18 +84,18 @@ def stroke_start(t: np.ndarray, p: np.ndarray, k_cmd: int, t_on: float, p_contac
     Before the piston moves, the inflow fills only the chamber's small dead volume and the pressure rises
     within milliseconds to the reset spring's prestress over the piston area; through the stroke it then
     ramps with the spring's deflection, slowly and nearly linearly, up to the contact pressure. A straight
-    line through the middle half of the stroke (clear of that first rise and of the contact's jump) is followed back to the first rise's
-    midpoint (the pressure halfway between its level before the step and the line): its value there is the
-    start of the stroke. The midpoint of a rise of tenths of a bar within milliseconds is placed to a sample
+    line through the middle half of the stroke (clear of that first rise and of the contact's jump) is
+    followed back to the first rise's midpoint (the pressure halfway between its level before the step and
+    the line): its value there is the start of the stroke. The midpoint of a rise of tenths of a bar within milliseconds is placed to a sample
     whatever the sensor's noise, where the first sample to reach the line itself would not be.
     """
     idx = np.flatnonzero((t > t[k_cmd]) & (t < t_on - 0.005))
     if idx.size < MIN_STROKE_SAMPLES:
         return float("nan"), float("nan")
-    late = idx[idx.size // 4:3 * idx.size // 4]  # clear of the first rise and of the contact's jump
-    coef, cov = np.polyfit(t[late] - t[late[0]], p[late], 1, cov=True)
-    line = np.polyval(coef, t[idx] - t[late[0]])
-    before = float(np.median(p[max(k_cmd - 50, 0):k_cmd + 1]))
+    mid = idx[idx.size // 4:3 * idx.size // 4]
+    coef, cov = np.polyfit(t[mid] - t[mid[0]], p[mid], 1, cov=True)
+    line = np.polyval(coef, t[idx] - t[mid[0]])
+    before = float(np.median(p[(t > t[k_cmd] - 0.05) & (t <= t[k_cmd])]))
     met = np.flatnonzero(p[idx] >= 0.5 * (before + line))
     if met.size == 0 or met[0] >= idx.size // 4:
         return float("nan"), float("nan")  # no quick rise onto a ramp: not a stroke this record shows
@@ -103,7 +103,7 @@ def stroke_start(t: np.ndarray, p: np.ndarray, k_cmd: int, t_on: float, p_contac
     value = float(line[k])
     if not 0.0 < value < p_contact or coef[0] <= 0.0:
         return float("nan"), float("nan")
-    dt_k = t[idx[k]] - t[late[0]]
+    dt_k = t[idx[k]] - t[mid[0]]
     se = float(np.sqrt(cov[1, 1] + dt_k * dt_k * cov[0, 0] + 2.0 * dt_k * cov[0, 1]))
-    # where on the first rise the line is met is uncertain by a sample, in which the ramp moves on
+    # the rise's midpoint is placed to a sample, in which the ramp moves on
     return value, float(np.hypot(se, coef[0] * (t[1] - t[0])))
