@@ -172,7 +172,7 @@ def test_the_stroke_start_is_where_the_first_rise_meets_the_stroke_line(p0, slop
     p += np.random.default_rng(1).normal(0.0, 0.02e5, t.size)
     k_cmd = int(np.argmax(t >= t_cmd))
     value, se = onset.stroke_start(t, p, k_cmd, t_cmd + stroke, p0 + slope * stroke)
-    assert 0.0 < se < 0.02e5
+    assert 200.0 < se < 0.02e5  # the sensor's 2 kPa of noise over a few hundred samples, extrapolated
     assert abs(value - p0) < 4.0 * se + 0.002e5
 
 

@@ -124,7 +124,19 @@ def test_inverse_map_inverts_a_known_curve():
     inside = (target >= p[0]) & (target <= p[-1])
     exact = (-0.29 + np.sqrt(0.29**2 - 4 * 0.41 * (0.20 - target[inside] / 1e5))) / (2 * 0.41)
     np.testing.assert_allclose(table[inside], exact, atol=0.02)  # linear interpolation between 0.3 V points
-    assert np.all(np.diff(table) >= 0)
+    # pressures the curve cannot reach map to the input range's ends
+    assert np.all(table[target < p[0]] == v[0]) and np.all(table[target > p[-1]] == v[-1])
+
+
+def test_inverse_map_takes_the_lowest_input_of_a_flat_stretch():
+    # below the piston's prestress the static pressure does not move with the input: any input there holds
+    # that pressure, and the map must answer with the lowest (the fill's exit from full input relies on it)
+    v = designs.MAP_VOLTS
+    p = (0.41 * v**2 + 0.29 * v + 0.20) * 1e5
+    stretch = (v > 1.0) & (v < 2.1)  # 1.1 to 2.0 V hold the pressure of 1.1 V
+    p[stretch] = p[stretch][0]
+    table = designs.inverse_map(p[None, :], v, np.array([p[stretch][0]]))[0]
+    assert np.count_nonzero(stretch) == 4 and table[0] == pytest.approx(v[stretch][0], abs=1e-6)
 
 
 def test_unknown_controller_is_refused():
