@@ -86,8 +86,9 @@ def stroke_start(t: np.ndarray, p: np.ndarray, k_cmd: int, t_on: float, p_contac
     ramps with the spring's deflection, slowly and nearly linearly, up to the contact pressure. A straight
     line through the middle half of the stroke (clear of that first rise and of the contact's jump) is
     followed back to the first rise's midpoint (the pressure halfway between its level before the step and
-    the line): its value there is the start of the stroke. The midpoint of a rise of tenths of a bar within milliseconds is placed to a sample
-    whatever the sensor's noise, where the first sample to reach the line itself would not be.
+    the line): its value there is the start of the stroke. The midpoint of a rise of tenths of a bar within
+    milliseconds is placed to a sample whatever the sensor's noise, where the first sample to reach the line
+    itself would not be.
     """
     idx = np.flatnonzero((t > t[k_cmd]) & (t < t_on - 0.005))
     if idx.size < MIN_STROKE_SAMPLES:

@@ -45,7 +45,7 @@ from .dynamics import frequency_response, step_models
 from .estimate import Estimate, source, weighted_mean
 from .friction import SLIP_MIN, W_RATIO, commanded_ratio, friction, measured_ratio, slip_samples
 from .inertia import J_P_HELD, REL_SE_MAX, InertiaFit, excited, inertias
-from .onset import onset
+from .onset import Onset, onset
 from .recordings import Recording
 from .result import Identification, identified_params
 from .ringing import resonance
@@ -95,14 +95,9 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
         points += plateaus(rec)
 
     if onsets:
-        m, se = weighted_mean(np.array([o.p_contact for o in onsets]), np.array([o.p_contact_se for o in onsets]))
-        est["contact_pressure_Pa"] = Estimate(m, se, "Pa", [source(o.rec, o.t_command, o.t_command + o.dead_time)
-                                                            for o in onsets])
-        starts = [o for o in onsets if np.isfinite(o.p_start)]
-        if starts:
-            m, se = weighted_mean(np.array([o.p_start for o in starts]), np.array([o.p_start_se for o in starts]))
-            est["stroke_start_Pa"] = Estimate(m, se, "Pa", [source(o.rec, o.t_command, o.t_command + o.dead_time)
-                                                            for o in starts])
+        est["contact_pressure_Pa"] = _pressure_over_onsets(onsets, "p_contact")
+        if starts := [o for o in onsets if np.isfinite(o.p_start)]:
+            est["stroke_start_Pa"] = _pressure_over_onsets(starts, "p_start")
     p_contact = est["contact_pressure_Pa"].value if onsets else actuator.contact_pressure(prior)
     by_rec = {id(o.rec): o for o in onsets}
     clutch_runs = [r for r in recordings if r.config == "clutch"]
@@ -146,6 +141,13 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
                             identified, {k: why for k, (_, why) in notes.items()})
     result.validation = validate(result)
     return result
+
+
+def _pressure_over_onsets(onsets: Sequence[Onset], name: str) -> Estimate:
+    """The weighted mean of the runs' pressure ``name`` (an :class:`Onset` field with its ``_se``), Pa."""
+    m, se = weighted_mean(np.array([getattr(o, name) for o in onsets]),
+                          np.array([getattr(o, f"{name}_se") for o in onsets]))
+    return Estimate(m, se, "Pa", [source(o.rec, o.t_command, o.t_command + o.dead_time) for o in onsets])
 
 
 def _ratios(runs: Sequence[Recording], prior: Params, est: dict[str, Estimate],

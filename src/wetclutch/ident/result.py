@@ -145,13 +145,14 @@ def identified_values(prior: Params, est: dict[str, Estimate],
     if "oil_temp_C" in est:
         sets["rig.oil_temp_C"] = float(np.clip(est["oil_temp_C"].value, *OIL_TEMP_RANGE_C))
     h = prior.hydraulics
-    p_start = h.p_prestress
-    if "stroke_start_Pa" in est and (
-            "contact_pressure_Pa" not in est or est["stroke_start_Pa"].value < est["contact_pressure_Pa"].value):
-        p_start = float(est["stroke_start_Pa"].value)
-        sets["hydraulics.p_prestress"] = p_start
-    if "contact_pressure_Pa" in est and est["contact_pressure_Pa"].value > p_start:
-        sets["hydraulics.x_contact"] = (est["contact_pressure_Pa"].value - p_start) * h.A_p / h.k_reset
+    if "contact_pressure_Pa" in est:
+        # both come from the torque onsets: a stroke start only with a contact pressure
+        p_contact, p_start = est["contact_pressure_Pa"].value, h.p_prestress
+        if "stroke_start_Pa" in est and est["stroke_start_Pa"].value < p_contact:
+            p_start = float(est["stroke_start_Pa"].value)
+            sets["hydraulics.p_prestress"] = p_start
+        if p_contact > p_start:
+            sets["hydraulics.x_contact"] = (p_contact - p_start) * h.A_p / h.k_reset
     if "resonance_Hz" in est:
         zeta = est["damping_ratio"].value if "damping_ratio" in est else None
         plant = prior.model_copy(update={"driveline": prior.driveline.model_copy(update=inertias)})

@@ -55,9 +55,10 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       low-pass filtered) and scales its friction law by it: an adaptive
       feedforward. While the clutch output swings back (a heavy one at a low CVT
       ratio rings against the axle at a few Hz), that filter slows down: following
-      the axle torque's swing, the estimate would keep the ringing up. An integrator on the torque error removes what is left
-      (efficiency, kiss-point error). The slip in ``mu(slip)`` comes from the
-      primary and secondary flywheels, whose speeds are smooth.
+      the axle torque's swing, the estimate would keep the ringing up. An
+      integrator on the torque error removes what is left (efficiency,
+      kiss-point error). The slip in ``mu(slip)`` comes from the primary and
+      secondary flywheels, whose speeds are smooth.
     * **Dither.** In DC mode nothing shakes the valve stem, whose friction then
       makes the pressure stall in steps (the study's reason for PWM); worse, the
       magnet's hysteresis is a play of some 0.225 V of input, and after each
@@ -272,6 +273,14 @@ def _hold_setpoint(ctrl, cs, dt, p_hold):
 
 
 @_inline
+def _output_swing(cs, meas, dt):
+    """Track how far the clutch output's speed has swung back below its highest of the slip phase (held, decaying
+    with :data:`W1_DROP_TAU`): its ringing against the axle, which slows the friction-factor estimate."""
+    cs[CS_W1PEAK] = max(cs[CS_W1PEAK], meas[M_W1])
+    cs[CS_W1DROP] = max(cs[CS_W1PEAK] - meas[M_W1], cs[CS_W1DROP] * (1.0 - dt / W1_DROP_TAU))
+
+
+@_inline
 def _friction_estimate(ctrl, cs, meas, p, slip, dt):
     """Low-pass the friction factor: measured torque over the nominal model's at the measured pressure, once the
     plates press hard enough for the ratio to mean something."""
@@ -320,8 +329,7 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     # with the clutch torque, and feeding that back through mu(slip) closes a fast loop
     ratio = _ratio(ctrl, meas)
     slip = meas[M_WP] - meas[M_WS] / ratio
-    cs[CS_W1PEAK] = max(cs[CS_W1PEAK], meas[M_W1])
-    cs[CS_W1DROP] = max(cs[CS_W1PEAK] - meas[M_W1], cs[CS_W1DROP] * (1.0 - dt / W1_DROP_TAU))
+    _output_swing(cs, meas, dt)
     _friction_estimate(ctrl, cs, meas, p, slip, dt)
     th = cs[CS_THETA]
     p_r = _pressure_target(ctrl, cs[CS_KISS], r, slip, th, ratio)
