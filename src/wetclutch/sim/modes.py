@@ -57,7 +57,10 @@ def _first_guess(t, x, net, ext, clm, grm):
     for j in range(nc):
         a = net.cl_a[j]
         b = net.cl_b[j]
-        cap = max(capacity(j, t, False, x, net, ext), capacity(j, t_right, False, x, net, ext))
+        # the capacity at t and just after it, through one call site (each is a copy to compile)
+        cap = -np.inf
+        for side in range(2):
+            cap = max(cap, capacity(j, t if side == 0 else t_right, False, x, net, ext))
         s = slip(x, net, j)
         scale = max(1.0, abs(x[a]), abs(x[b]) if b >= 0 else 0.0)
         if net.cl_oneway[j] != 0:
@@ -254,20 +257,26 @@ def settle(t, net, ext, ws):
         if not rhs_call(t, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm), bool(True)):
             forget(ws.fact)
             return -1
-        if ws.istate[IS_REDUNDANT] != 0:
-            redundant = True
-            # redundant locks: the clutches and brakes give way (carry their sliding torque) before
-            # a stuck gear, whose share of the least-norm distribution may lie outside its bounds
-            # while another distribution keeps it inside
-            if _release_worst(ws.aux, net, clm, released, ws.fstate):
-                continue
-        if _gear_modes(x, ws.dx, ws.aux, net, grm, released):
-            if redundant:
-                # a gear at its bound changes the shares: a clutch that gave way may hold again
-                for j in range(nc):
-                    released[j] = 0
-            continue
-        if _release_worst(ws.aux, net, clm, released, ws.fstate):
+        redundant_now = ws.istate[IS_REDUNDANT] != 0
+        redundant = redundant or redundant_now
+        # redundant locks: the clutches and brakes give way (carry their sliding torque) before a stuck
+        # gear, whose share of the least-norm distribution may lie outside its bounds while another
+        # distribution keeps it inside; otherwise the gears are decided first. One call site of each
+        # (each is a copy to compile).
+        changed = False
+        for phase in range(3):
+            if phase == 1:
+                if _gear_modes(x, ws.dx, ws.aux, net, grm, released):
+                    if redundant:
+                        # a gear at its bound changes the shares: a clutch that gave way may hold again
+                        for j in range(nc):
+                            released[j] = 0
+                    changed = True
+                    break
+            elif (phase == 0) == redundant_now and _release_worst(ws.aux, net, clm, released, ws.fstate):
+                changed = True
+                break
+        if changed:
             continue
         if not _lock_backsliding(x, ws.dx, net, clm, released):
             return 1

@@ -204,9 +204,20 @@ def value(k, t, left, sig, tab, ext):
     ``sig`` and ``tab`` are the rows and table of :func:`compile_signals`, ``ext`` the
     external values.
     """
+    # the kinds a closed loop evaluates every step are read in place; the others are one
+    # compiled call, as numba copies an inlined body at each of the core's many call sites
     kind = int(sig[k, KIND])
     if kind == CONST:
         return sig[k, C_VALUE]
+    if kind == EXTERNAL:
+        return ext[int(sig[k, E_SLOT])]
+    return _timed_value(k, t, bool(left), sig, tab)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _timed_value(k, t, left, sig, tab):
+    """Value of a signal that follows time (step, ramp, sine, table)."""
+    kind = int(sig[k, KIND])
     if kind == STEP:
         t0 = sig[k, S_T0]
         if t > t0 or (t == t0 and not left):
@@ -239,6 +250,4 @@ def value(k, t, left, sig, tab, ext):
                 hi = mid
         f = (t - tab[0, lo]) / (tab[0, hi] - tab[0, lo])
         return tab[1, lo] + f * (tab[1, hi] - tab[1, lo])
-    if kind == EXTERNAL:
-        return ext[int(sig[k, E_SLOT])]
     return 0.0
