@@ -274,10 +274,14 @@ def test_pressure_models_and_frequency_response_are_lti(identified):
     assert {m.order for m in identified.steps} == {1, 2}
     for m in identified.steps:
         sys_ = m.lti()
-        assert isinstance(sys_, control.TransferFunction)
+        # as many stable poles as the model's order, and its gain at DC
+        assert len(control.poles(sys_)) == m.order and np.all(np.real(control.poles(sys_)) < 0.0)
         assert np.isclose(control.dcgain(sys_), m.gain, rtol=1e-6)
     (fr,) = identified.responses
-    assert isinstance(fr.frd(), control.FrequencyResponseData)
+    # the FRD holds the measured response at the measured frequencies, in rad/s
+    frd = fr.frd()
+    assert np.allclose(frd.omega, 2 * np.pi * fr.freq)
+    assert np.isclose(frd.eval(frd.omega[1]), fr.H[1])
     assert fr.freq.min() >= 0.2 and np.all(fr.coherence > 0.5)
 
 
