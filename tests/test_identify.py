@@ -23,6 +23,7 @@ from wetclutch.ident import recordings as channels
 from wetclutch.errors import WetclutchError
 from wetclutch.physics import actuator
 from wetclutch.plant import clutch, driveline
+from wetclutch.report.identify import measured_cell
 from wetclutch.report import identify as identify_report
 from wetclutch.report import rig as rig_report
 from wetclutch.rig import experiments as rig
@@ -181,6 +182,10 @@ def test_a_stroke_too_short_to_show_gives_no_start():
     p = np.where(t >= 1.0, 0.8e5, 0.1e5)
     value, se = onset.stroke_start(t, p, 1000, 1.0 + onset.MIN_STROKE_SAMPLES * 1e-3 / 2, 0.9e5)
     assert np.isnan(value) and np.isnan(se)
+    # the report's per-run table shows a dash for it, not "nan ± nan"
+    assert measured_cell(value / 1e5, se / 1e5, 3) == "–"
+    assert measured_cell(0.3481, 0.0021, 3) == "0.348 ± 0.002"
+    assert measured_cell(0.3481, float("nan"), 3) == "0.348"
 
 
 def test_a_prestress_unlike_the_prior_is_identified_and_the_stroke_follows(tmp_path):

@@ -59,6 +59,14 @@ def _pm(value: Any, se: Any) -> str:
     return f"{value:.5g}" + (f" ± {se:.2g}" if isinstance(se, float) and np.isfinite(se) else "")
 
 
+def measured_cell(value: float, se: float, digits: int) -> str:
+    """A table cell for a value measured on one run and its standard error: a dash where the run did not show
+    it (NaN), no error where none could be given."""
+    if not np.isfinite(value):
+        return "–"
+    return f"{value:.{digits}f}" + (f" ± {se:.1g}" if np.isfinite(se) else "")
+
+
 def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
     e = result.estimates
     lines = ["# Identification report", "", "## Files", "", "| file | experiment | config | input | oil temp [C] | duration [s] |",
@@ -73,9 +81,9 @@ def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
         lines += ["", "### Dead time and contact pressure per run", "",
                   "| file | oil temp [C] | input | dead time [s] | stroke start [bar] | contact pressure [bar] |",
                   "|---|---|---|---|---|---|"]
-        lines += [f"| {o.rec.path} | {o.rec.oil_temp_C:.1f} | {o.level:g} | {o.dead_time:.4f} ± {o.dead_time_se:.1g} | "
-                  f"{o.p_start / BAR:.3f} ± {o.p_start_se / BAR:.1g} | "
-                  f"{o.p_contact / BAR:.3f} ± {o.p_contact_se / BAR:.1g} |" for o in result.onsets]
+        lines += [f"| {o.rec.path} | {o.rec.oil_temp_C:.1f} | {o.level:g} | {measured_cell(o.dead_time, o.dead_time_se, 4)} | "
+                  f"{measured_cell(o.p_start / BAR, o.p_start_se / BAR, 3)} | "
+                  f"{measured_cell(o.p_contact / BAR, o.p_contact_se / BAR, 3)} |" for o in result.onsets]
     if result.steps:
         lines += ["", "### Pressure models fitted to steps and relaxations", "",
                   "| file | model | gain [bar/unit] | dead time [s] | parameters | VAF [%] |", "|---|---|---|---|---|---|"]
