@@ -17,6 +17,7 @@ The clutch is in standby from t = 0; the torque request comes at
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -215,16 +216,30 @@ def reference(cond: Conditions, t: np.ndarray) -> np.ndarray:
 
 @dataclass
 class LaunchResult:
-    """A launch: measured signals (plus ``t_ref`` and ``u``), true signals, and its figures."""
+    """A launch: measured signals (plus ``t_ref`` and ``u``), true signals, and its figures.
 
-    signals: pd.DataFrame
-    truth: pd.DataFrame
+    ``signals`` and ``truth`` are tables of ``signal_columns`` and ``truth_columns``, made when first read: a
+    verification of a thousand launches reads only their figures.
+    """
+
+    signal_columns: dict[str, np.ndarray]
+    truth_columns: dict[str, np.ndarray]
     summary: dict[str, Any]
     conditions: Conditions
     controller: str
     stats: dict[str, int] = field(default_factory=dict)
     kiss_found_Pa: float | None = None
     adaptation: Adaptation = field(default_factory=Adaptation)
+
+    @functools.cached_property
+    def signals(self) -> pd.DataFrame:
+        """The measured signals, ``t_ref`` and ``u`` on the controller's sample times."""
+        return pd.DataFrame(self.signal_columns)
+
+    @functools.cached_property
+    def truth(self) -> pd.DataFrame:
+        """The true signals on the same times."""
+        return pd.DataFrame(self.truth_columns)
 
 
 def _design(plant: Params, controller: design_.Design | str) -> design_.Design:
@@ -293,10 +308,10 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
         raise SimulationError(f"launch simulation failed: {failure(rn.network, ws, status)}")
     tr = Trajectory.from_run(rn.network, ws, *out, m)
     m = tr.t.size
-    signals = pd.DataFrame({"time": t_grid[:m], **{c: out_meas[:m, j] for j, c in enumerate(control.MEASURED)},
-                            "t_ref": t_ref[:m], "u": out_u[:m]})
+    signals = {"time": t_grid[:m], **{c: out_meas[:m, j] for j, c in enumerate(control.MEASURED)},
+               "t_ref": t_ref[:m], "u": out_u[:m]}
     w_p = tr.speed("p")
-    truth = pd.DataFrame({
+    truth = {
         "time": tr.t,
         "p_clutch": tr.actuator_state(actuator.PRESSURE),
         "T_r": tr.spring_torque("axle"),
@@ -306,14 +321,14 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
         "locked": tr.locked("clutch"),
         "E_clutch": tr.dissipated("clutch"),
         "T_plate": tr.plate_temperature(),
-    })
+    }
     t_sync = tr.sync_time("clutch")
-    resp = metrics.response(signals["time"].to_numpy(), signals["T_r"].to_numpy(), t_ref[:m], cond.t_request, t_sync)
+    resp = metrics.response(signals["time"], signals["T_r"], t_ref[:m], cond.t_request, t_sync)
     if nominal is None:
         nominal = nominal_response(d, cond)
-    summary = metrics.summary(resp, nominal, slip_energy=float(truth["E_clutch"].iloc[-1]), t_sync=t_sync)
+    summary = metrics.summary(resp, nominal, slip_energy=float(truth["E_clutch"][-1]), t_sync=t_sync)
     summary.update(controller=d.kind, t_ref_Nm=cond.t_ref, profile=str(cond.profile), oil_temp_C=temp)
-    t_peak, limit = float(truth["T_plate"].max()), p.thermal.T_plate_limit_C
+    t_peak, limit = float(np.max(truth["T_plate"])), p.thermal.T_plate_limit_C
     summary.update(T_plate_peak_C=t_peak, T_plate_limit_C=limit, T_plate_over_limit=bool(t_peak > limit))
     found = float(cs[control.CS_KISS]) if d.kind == "launch" and cs[control.CS_FOUND] else None
     kiss_start = (d.settings["p_kiss"] if start is None else start) if d.kind == "launch" else None
@@ -324,7 +339,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
                    friction_factor_found=friction)
     if cond.post_sync_hold:
         signals["ratio"] = tr.ratio("cvt")
-        summary.update(ratio_hold.summary(tr.t, truth["T_r"].to_numpy(), t_ref[:m], tr.ratio("cvt"), t_sync, hs))
+        summary.update(ratio_hold.summary(tr.t, truth["T_r"], t_ref[:m], tr.ratio("cvt"), t_sync, hs))
     if found is not None:
         learnt = learnt.learn(temp, found, friction)
     return LaunchResult(signals, truth, summary, cond, d.kind, tr.stats, found, learnt)
@@ -340,8 +355,8 @@ def nominal_response(d: design_.Design, cond: Conditions) -> metrics.Response:
     key = (d.key(), c)
     if key not in _NOMINAL:
         res = simulate(d.plant, d, c, nominal=metrics.Response.empty())
-        _NOMINAL[key] = metrics.response(res.signals["time"].to_numpy(), res.signals["T_r"].to_numpy(),
-                                         res.signals["t_ref"].to_numpy(), c.t_request, res.summary["t_sync_s"])
+        sig = res.signal_columns
+        _NOMINAL[key] = metrics.response(sig["time"], sig["T_r"], sig["t_ref"], c.t_request, res.summary["t_sync_s"])
     return _NOMINAL[key]
 
 
