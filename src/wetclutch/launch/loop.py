@@ -59,6 +59,11 @@ RTOL = 1e-5
 #: the absolute tolerance of the plant's integration (the valve stem's speed gets its own: ``RigNetwork.atol``)
 ATOL = 1e-9
 ERR_STEPS = -1
+#: the loop has used every sensor-noise sample it was given (:data:`NOISE_CHUNK`)
+NEED_NOISE = -2
+#: seconds of sensor noise drawn at a time: a launch ends half a second after its clutch has locked, mostly long
+#: before ``t_max``, and drawing all of ``t_max`` was some 3 % of a launch's time
+NOISE_CHUNK = 4.0
 
 
 def _probe(rn: clutch.RigNetwork) -> np.ndarray:
@@ -97,15 +102,17 @@ coldstart.register(_cold_jobs)
 
 @_jit
 def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, hold, hs, t_ref, dt, t_after, rtol, atol,
-                 out_t, out_x, out_aux, out_mode, out_meas, out_u):
-    """Run the sampled loop (with a ratio ``hold`` record, the CVT's ratio rate goes to the input slot after
-    ``u_slot``); returns (status, number of samples)."""
+                 k0, zf, lock, out_t, out_x, out_aux, out_mode, out_meas, out_u):
+    """Run the sampled loop from sample ``k0`` (with a ratio ``hold`` record, the CVT's ratio rate goes to the input
+    slot after ``u_slot``); returns (status, number of samples). It stops with ``NEED_NOISE`` where the rows of
+    ``noise`` end before the samples do, and goes on from there when called again with the next rows; what it
+    carries over is in ``zf`` (the sensor filters' states) and ``lock`` (the time the clutch locked, -1: not)."""
     n = t_ref.shape[0]
     truth = np.zeros(N_CH)
     meas = np.zeros(N_CH)
-    zf = np.zeros((N_CH, 2))
-    t_lock = -1.0
-    for k in range(n):
+    for k in range(k0, n):
+        if k >= noise.shape[0]:
+            return NEED_NOISE, k
         _true_values(net, ws.x, probe, temp, truth)
         for c in range(N_CH):
             v = filter_sample(sensors[c], zf[c], truth[c], k == 0)
@@ -124,12 +131,12 @@ def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, ho
         if ws.istate[IS_STEPS] + ws.istate[IS_REJECTED] > MAX_STEPS:
             return ERR_STEPS, k
         if ws.clm[0] == LOCKED:
-            if t_lock < 0.0:
-                t_lock = (k + 1) * dt
-            elif (k + 1) * dt - t_lock >= t_after:
+            if lock[0] < 0.0:
+                lock[0] = (k + 1) * dt
+            elif (k + 1) * dt - lock[0] >= t_after:
                 return OK, k + 1
         else:
-            t_lock = -1.0
+            lock[0] = -1.0
     return OK, n
 
 
@@ -289,7 +296,8 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     probe = _probe(rn)
     sensors = sensor_table(control.MEASURED, 1.0 / cond.dt, noise=cond.noise, noise_scale=cond.noise_scale)
     rng = np.random.default_rng(cond.seed)
-    noise = rng.standard_normal((n, N_CH)) if cond.noise else np.zeros((n, N_CH))
+    chunk = int(round(NOISE_CHUNK / cond.dt))
+    noise = rng.standard_normal((min(chunk, n), N_CH)) if cond.noise else np.zeros((n, N_CH))
     out = outputs(n, x0.size, ws.aux.size, len(rn.network.clutches))
     out_meas = np.zeros((n, N_CH))
     out_u = np.zeros(n)
@@ -299,8 +307,14 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
                                learnt.friction_factor(temp) if d.kind == "launch" else None)
     t_after = cond.t_after + (cond.hold_time if cond.post_sync_hold else 0.0)
     coldstart.begin(net, ext, ws)
-    status, m = _closed_loop(net, ext, ws, 0, probe, temp, sensors, noise, ctrl, cs, hold, hs, t_ref, cond.dt,
-                             t_after, cond.rtol, rn.atol(ATOL), *out, out_meas, out_u)
+    zf, lock, m = np.zeros((N_CH, 2)), np.full(1, -1.0), 0
+    while True:
+        status, m = _closed_loop(net, ext, ws, 0, probe, temp, sensors, noise, ctrl, cs, hold, hs, t_ref, cond.dt,
+                                 t_after, cond.rtol, rn.atol(ATOL), m, zf, lock, *out, out_meas, out_u)
+        if status != NEED_NOISE:
+            break
+        # the generator's stream goes on as if all of it had been drawn at once
+        noise = np.concatenate([noise, rng.standard_normal((min(chunk, n - noise.shape[0]), N_CH))])
     if status == ERR_STEPS:
         raise SimulationError(f"launch simulation stopped at {m * cond.dt:.3f} s: more than {MAX_STEPS} integration "
                               "steps (the plant chatters between stick and slip)")
