@@ -50,15 +50,19 @@ def _event_value(e, theta_t, t_old, h, y_old, ws, net, ext):
 
 
 @jit_inline
-def _emit(t, y, ws, net, ext, out_t, out_x, out_aux, out_mode):
-    """Write one output row (state, element torques, clutch modes) at time ``t``."""
+def _emit(t, y, known, ws, net, ext, out_t, out_x, out_aux, out_mode):
+    """Write one output row (state, element torques, clutch modes) at time ``t``; with ``known`` the torques of
+    ``y`` are the ones in ``ws.aux`` (the current step's start), else they are evaluated."""
     i = ws.istate[IS_N_OUT]
     if i >= out_t.shape[0]:
         return
-    rhs_call(t, y, net, ext, ws, ws.dx, ws.aux_new, bool(False), bool(False))
+    aux = ws.aux
+    if not known:
+        rhs_call(t, y, net, ext, ws, ws.dx, ws.aux_new, bool(False), bool(False))
+        aux = ws.aux_new
     out_t[i] = t
     copy(out_x[i], y)
-    copy(out_aux[i], ws.aux_new)
+    copy(out_aux[i], aux)
     for j in range(ws.clm.shape[0]):
         out_mode[i, j] = ws.clm[j]
     ws.istate[IS_N_OUT] = i + 1
@@ -219,7 +223,9 @@ def _emit_grid(t, t_seg, h, y_old, ws, net, ext, dt_out, t_out0, out_t, out_x, o
     while j < n_grid and t_out0 + j * dt_out < t_seg:
         tg = t_out0 + j * dt_out
         dense(y_old, ws.K, h, (tg - t) / h, ws.y_tmp, ws.bw)
-        _emit(tg, ws.y_tmp, ws, net, ext, out_t, out_x, out_aux, out_mode)
+        # a row at the step's start (every sample of a closed loop) has its torques already: those the step
+        # began from
+        _emit(tg, ws.y_tmp, tg == t, ws, net, ext, out_t, out_x, out_aux, out_mode)
         j = ws.istate[IS_N_OUT]
 
 
@@ -335,5 +341,5 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
     # the last grid point, when it falls on t_stop (earlier ones start the next call)
     j = ws.istate[IS_N_OUT]
     if j == n_grid - 1 and abs(t_out0 + j * dt_out - t_stop) <= 1e-9 * max(1.0, dt_out):
-        _emit(t_stop, ws.x, ws, net, ext, out_t, out_x, out_aux, out_mode)
+        _emit(t_stop, ws.x, False, ws, net, ext, out_t, out_x, out_aux, out_mode)
     return OK
