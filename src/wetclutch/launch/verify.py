@@ -67,8 +67,8 @@ class Context:
                                         profile=self.profile, seed=sample.seed,
                                         noise_scale=cond.get("noise_scale", base.noise_scale))
 
-    def replay(self, sample: Sample) -> str:
-        plant, cond = self.case(sample)
+    def replay(self, sample: Sample, plant: Params, cond: launch.Conditions) -> str:
+        """The ``wetclutch launch`` command that runs ``sample`` (its plant and conditions from :meth:`case`) again."""
         # full precision: a launch with stick/slip events is sensitive to the last digits
         sets = " ".join(f"--set {r.target}={_dotted(plant, r.target)!r}" for r in self.ranges if not r.is_condition)
         temp = plant.rig.oil_temp_C if cond.oil_temp_C is None else cond.oil_temp_C
@@ -131,7 +131,7 @@ def run_sample(ctx: Context, sample: Sample, grid: tuple[np.ndarray, np.ndarray]
     slams = sum(1 for x in seq if x["overshoot_pct"] is not None and x["overshoot_pct"] > 100.0 * (SLAM_FACTOR - 1))
     return {"index": sample.index, "corner": sample.corner, "seed": sample.seed, "values": sample.values,
             "metrics": figures, "requirements": req, "all_pass": all(req.values()), "first_all_pass": first,
-            "slams": slams, "error": error, "replay": ctx.replay(sample)}
+            "slams": slams, "error": error, "replay": ctx.replay(sample, plant, cond)}
 
 
 _SHARED: tuple[Context, tuple[np.ndarray, np.ndarray]] | None = None
