@@ -353,7 +353,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
                    friction_factor_found=friction)
     if cond.post_sync_hold:
         signals["ratio"] = tr.ratio("cvt")
-        summary.update(ratio_hold.summary(tr.t, truth["T_r"], t_ref[:m], tr.ratio("cvt"), t_sync, hs))
+        summary.update(ratio_hold.summary(tr.t, truth["T_r"], t_ref[:m], signals["ratio"], t_sync, hs))
     if found is not None:
         learnt = learnt.learn(temp, found, friction)
     return LaunchResult(signals, truth, summary, cond, d.kind, tr.stats, found, learnt)
