@@ -15,7 +15,8 @@ the CVT, the work of the actuator's force on the stem, and the oil volumes into 
 the clutch (``bookkeeping=False`` leaves them out: a lighter model than the engine's).
 
 * Coil: current controller (setpoint ``g_current u``) saturating at the supply voltage,
-  freewheeling when it asks for a negative voltage.
+  freewheeling when it asks for a negative voltage: three modes of the output stage,
+  switched at events.
 * Magnet: the magnetising current ``I_m`` follows ``I`` through a smoothed play of
   half-width ``I_hyst`` (``dI_m/dt = dI/dt min(z, 1)^8``, ``z = (I - I_m) sign(dI/dt) / I_hyst``);
   force ``k_F1 I_m + k_F2 I_m^2``, continued linearly above ``I_sat``.
@@ -35,7 +36,7 @@ from open to slipping (it never locks within 5 s) and the road-load brake only r
 the reverse switches are not modelled.
 
 Agreement with the engine (``__main__``): the same events (stem stick/slip switches, contact,
-road-load release); pressure within 2 Pa at 1.2-5 s, torque onset within 7 us; about 100 Pa at
+road-load release, the amplifier's modes); pressure within 2 Pa at 1.2-5 s, torque onset within 7 us; about 100 Pa at
 worst on the 1 ms grid, right after contact (a steep rise; integration error of both sides);
 the energy terms at 5 s within 0.01 %, and the energy balance closes to 3e-8 of the
 stored energy (the engine's to 1e-13).
@@ -189,17 +190,29 @@ def _axle(m, y):
     return m.k_a * y[PHI] + m.d_a * (m.i * y[W_1] - y[W_S])
 
 
+def _regulator(r, y, u):
+    """The current controller's voltage before the output stage limits it (V)."""
+    i_ref = r[A.G_CURRENT] * u
+    return r[A.R_COIL] * i_ref + r[A.K_AMP] * (i_ref - y[I])
+
+
+def _amp_mode(r, y, u):
+    """The output stage's mode: saturated (1) above the supply voltage, freewheeling (-1) below zero, else 0."""
+    v = _regulator(r, y, u)
+    return 1 if v > r[A.V_SUP] else -1 if v < 0.0 else 0
+
+
 def _rhs(t, y, m, modes, u):
-    """Time derivative of ``y`` for fixed modes (clutch, brake, stem, CVT) and input ``u`` (V).
+    """Time derivative of ``y`` for fixed modes (clutch, brake, stem, CVT, amplifier) and input ``u`` (V).
 
     With the bookkeeping states (``len(y) == 18``) also the energy and oil-volume rates."""
-    r, (mc, mb, ms, mg), dy = m.r, modes, [0.0] * len(y)
-    i_ref = r[A.G_CURRENT] * u
-    volt = r[A.R_COIL] * i_ref + r[A.K_AMP] * (i_ref - y[I])
-    if volt > r[A.V_SUP]:
+    r, (mc, mb, ms, mg, ma), dy = m.r, modes, [0.0] * len(y)
+    if ma == 1:
         volt = r[A.V_SUP]
-    elif volt < 0.0:
+    elif ma == -1:
         volt = -r[A.R_FW] * y[I]  # the output transistor blocks: freewheel
+    else:
+        volt = _regulator(r, y, u)
     dy[I] = (volt - r[A.R_COIL] * y[I]) / r[A.L_COIL]
     dy[IM] = _play(r, y[I], dy[I], y[IM])
     ports = _port_flows(r, y[X], y[P])
@@ -268,9 +281,9 @@ def _event(fun, direction, terminal=True):
     return fun
 
 
-def _events(m, modes, want_onset):
-    """``(name, event function)`` pairs valid in the current modes."""
-    mc, mb, ms, mg = modes
+def _events(m, modes, want_onset, u):
+    """``(name, event function)`` pairs valid in the current modes at input ``u``."""
+    mc, mb, ms, mg, ma = modes
     ev = []
     if mc == 0:
         ev.append(("contact", _event(lambda t, y, *_: y[P] - m.r[A.P_CONTACT], 1)))
@@ -287,13 +300,26 @@ def _events(m, modes, want_onset):
         ev.append(("gear_fwd", _event(lambda t, y, *_: _gear_margins(m, y, mc, mg)[1], -1)))
     else:
         ev.append(("gear_flow", _event(lambda t, y, *_: mg * _axle(m, y) * y[W_1], -1)))
+    v_sup = m.r[A.V_SUP]
+    if ma == 1:
+        ev.append(("amp", _event(lambda t, y, *_: _regulator(m.r, y, u) - v_sup, -1)))
+    elif ma == -1:
+        ev.append(("amp", _event(lambda t, y, *_: -_regulator(m.r, y, u), -1)))
+    else:
+        ev.append(("amp", _event(lambda t, y, *_: min(_regulator(m.r, y, u), v_sup - _regulator(m.r, y, u)), -1)))
     return ev
 
 
-def _switch(m, name, y, modes):
-    """New modes after event ``name`` at state ``y`` (``y`` is projected in place where a body stops)."""
-    mc, mb, ms, mg = modes
-    if name == "contact":
+def _switch(m, name, y, modes, u):
+    """New modes after event ``name`` at state ``y`` and input ``u`` (``y`` is projected in place where a body
+    stops)."""
+    mc, mb, ms, mg, ma = modes
+    if name == "amp":
+        # out of a limit into regulation; out of regulation across the nearer limit (the root may lie on
+        # either side of it)
+        v = _regulator(m.r, y, u)
+        ma = 0 if ma != 0 else (1 if v > 0.5 * m.r[A.V_SUP] else -1)
+    elif name == "contact":
         mc = 1 if y[W_P] > y[W_1] else -1
     elif name == "brake":
         mb = 1 if _axle(m, y) > 0.0 else -1
@@ -309,7 +335,7 @@ def _switch(m, name, y, modes):
         mg = _gear_at_rest(m, y, mc)
     else:  # gear_flow: the torque reversed, so the power flows the other way
         mg = -mg
-    return (mc, mb, ms, mg)
+    return (mc, mb, ms, mg, ma)
 
 
 def actuator_step_scipy(t_end: float = 5.0, method: str = "BDF", rtol: float = 1e-6, atol=None,
@@ -329,11 +355,12 @@ def actuator_step_scipy(t_end: float = 5.0, method: str = "BDF", rtol: float = 1
     grid = np.union1d(np.linspace(0.0, t_end, int(round(t_end / DT_OUT)) + 1), [min(T_STEP, t_end)])
     t, y = 0.0, np.zeros(n_y)
     y[W_P] = m.w_p0
-    modes = (0, LOCKED, _stem_at_rest(m, y), _gear_at_rest(m, y, 0))  # clutch open, road load held
+    modes = (0, LOCKED, _stem_at_rest(m, y), _gear_at_rest(m, y, 0), 0)  # clutch open, road load held
     onset, log, k, nfev, stalls, out = None, [], 0, 0, 0, []
     for t_b, u in ((min(T_STEP, t_end), U0), (t_end, U1)):
+        modes = (*modes[:4], _amp_mode(m.r, y, u))  # the input steps: the output stage's mode anew
         while t < t_b:
-            named = _events(m, modes, onset is None)
+            named = _events(m, modes, onset is None, u)
             t_eval = grid[k : np.searchsorted(grid, t_b, side="right")]
             sol = solve_ivp(_rhs, (t, t_b), y, method=method, t_eval=t_eval, rtol=rtol, atol=atol,
                             events=[f for _, f in named], args=(m, modes, u))
@@ -351,7 +378,7 @@ def actuator_step_scipy(t_end: float = 5.0, method: str = "BDF", rtol: float = 1
             if stalls > 20:
                 raise RuntimeError(f"event loop stalled at t={t}")
             t, y = float(sol.t_events[j][0]), sol.y_events[j][0].copy()
-            modes = _switch(m, named[j][0], y, modes)
+            modes = _switch(m, named[j][0], y, modes, u)
             log.append((t, named[j][0]))
     t_out = np.concatenate([t for t, _ in out])
     y_out = np.concatenate([y.T for _, y in out])

@@ -29,7 +29,10 @@ Electronics: in DC mode a current controller with setpoint ``g_current * u``
 drives the coil; its output saturates at the supply voltage, so a large step
 rises with ``L/R``; when the controller asks for a negative voltage the output
 transistor blocks and the current decays through the freewheel circuit with
-``L/(R + R_freewheel)``. In PWM mode the coil sees the supply voltage during the
+``L/(R + R_freewheel)``. These are the amplifier's three modes (regulating,
+saturated, freewheeling): the coil voltage jumps where the freewheel circuit takes
+over, so the engine switches them at located events (:func:`amplifier_event`), as it
+does a clutch's, and never inside a step. In PWM mode the coil sees the supply voltage during the
 high part of each period and freewheels through a diode during the low part, so
 the mean current is about ``duty * V_supply / R_coil``.
 
@@ -112,6 +115,8 @@ from . import friction, oil
 ) = range(46)
 
 DC, PWM = 0, 1
+#: modes of the DC amplifier's output stage
+REGULATE, SATURATED, FREEWHEEL = 0, 1, -1
 N_STATES = 5  # I, p, V_in, V_out, I_m: the actuator's block of the state vector, in this order
 CURRENT, PRESSURE, VOLUME_IN, VOLUME_OUT, MAGNETISATION = range(N_STATES)
 
@@ -204,10 +209,48 @@ def feedback_pressure(p, q_fb, act):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def evaluate(x, act, u, ext, dx, full=True):
-    """Write dI/dt and dp/dt into ``dx``; return (force on the stem, clutch normal force).
+def _regulator_voltage(cur, u, act):
+    """The DC current controller's output voltage before its stage limits it (V)."""
+    i_ref = act[G_CURRENT] * u
+    return act[R_COIL] * i_ref + act[K_AMP] * (i_ref - cur)
 
-    ``u`` is the input (V in DC mode; ignored in PWM mode, where ``ext`` holds the level).
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def amplifier_mode(x, act, u):
+    """The DC amplifier's mode at state ``x`` and input ``u``: saturated above the supply voltage,
+    freewheeling where the controller asks for a negative one, else regulating (PWM: regulating, unused)."""
+    if act[MODE] == PWM:
+        return REGULATE
+    v = _regulator_voltage(x[int(act[STATE]) + CURRENT], u, act)
+    if v > act[V_SUP]:
+        return SATURATED
+    if v < 0.0:
+        return FREEWHEEL
+    return REGULATE
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def amplifier_event(cur, u, act, mode):
+    """The amplifier's event function: >= 0 while ``mode`` holds (the controller's voltage within the
+    stage's range, above it, or below zero). PWM: 1 (its edges are time events)."""
+    if act[MODE] == PWM:
+        return 1.0
+    v = _regulator_voltage(cur, u, act)
+    if mode == SATURATED:
+        return v - act[V_SUP]
+    if mode == FREEWHEEL:
+        return -v
+    return min(v, act[V_SUP] - v)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE):
+    """Write the actuator's state rates into ``dx``; return (force on the stem, clutch normal force,
+    the amplifier's event function).
+
+    ``u`` is the input (V in DC mode; ignored in PWM mode, where ``ext`` holds the level) and
+    ``mode`` the DC amplifier's (:func:`amplifier_mode`, decided at the last restart: within a step
+    the regulating mode's voltage runs on beyond its range until the event is located).
     With ``full`` False only the forces are wanted: the pressure derivative is skipped.
     """
     i0 = int(act[STATE])
@@ -217,13 +260,12 @@ def evaluate(x, act, u, ext, dx, full=True):
     if act[MODE] == PWM:
         # low part of a period: the current freewheels through the diode (about 0 V)
         v = act[V_SUP] if ext[int(act[PWM_EXT])] > 0.5 else 0.0
+    elif mode == SATURATED:
+        v = act[V_SUP]
+    elif mode == FREEWHEEL:
+        v = -act[R_FW] * cur  # output transistor blocks: freewheel
     else:
-        i_ref = act[G_CURRENT] * u
-        v = act[R_COIL] * i_ref + act[K_AMP] * (i_ref - cur)
-        if v > act[V_SUP]:
-            v = act[V_SUP]
-        elif v < 0.0:
-            v = -act[R_FW] * cur  # output transistor blocks: freewheel
+        v = _regulator_voltage(cur, u, act)
     # constant reciprocals: the divide then runs off the dependency chain of the state
     cur_dot = (v - act[R_COIL] * cur) * (1.0 / act[L_COIL])
     dx[i0 + CURRENT] = cur_dot
@@ -274,7 +316,7 @@ def evaluate(x, act, u, ext, dx, full=True):
     dp_in = act[P_SUP] - p - act[R_LINE] * q_in
     f_flow = act[K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * pp)
     f_stem = f_mag + act[F_PRE] - act[A_FB] * feedback_pressure(p, q_fb, act) - f_flow
-    return f_stem, normal_force(p, act)
+    return f_stem, normal_force(p, act), amplifier_event(cur, u, act, mode)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")

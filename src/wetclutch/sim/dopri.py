@@ -92,8 +92,8 @@ def error_norm(y0, y1, K, h, rtol, atol, buf):
 
 
 @jit_inline
-def dense(y0, K, h, theta, out, bw):
-    nx = y0.shape[0]
+def weights(theta, bw):
+    """The dense output's stage weights at ``theta`` (0..1 of the step) into ``bw``."""
     for s in range(7):
         th = theta
         v = 0.0
@@ -101,8 +101,19 @@ def dense(y0, K, h, theta, out, bw):
             v += _P[s, j] * th
             th *= theta
         bw[s] = v
-    for i in range(nx):
-        acc = 0.0
-        for s in range(7):
-            acc += bw[s] * K[s, i]
-        out[i] = y0[i] + h * acc
+
+
+@jit_inline
+def component(y0, K, h, bw, i):
+    """State ``i`` of the dense output at the weights ``bw`` (:func:`weights`)."""
+    acc = 0.0
+    for s in range(7):
+        acc += bw[s] * K[s, i]
+    return y0[i] + h * acc
+
+
+@jit_inline
+def dense(y0, K, h, theta, out, bw):
+    weights(theta, bw)
+    for i in range(y0.shape[0]):
+        out[i] = component(y0, K, h, bw, i)

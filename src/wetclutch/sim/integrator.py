@@ -2,7 +2,9 @@
 
 In every interval between events the modes are fixed and the ODE is smooth. Events
 (slip through zero, constraint torque beyond the static capacity, capacity through zero,
-gear power-flow reversal) are located on the dense output by the Illinois method; the
+gear power-flow reversal, the valve amplifier leaving its regulating range) are located on
+the dense output by the Illinois method; a slip that dips through zero and back within one
+step is caught at its least value; the
 state is taken on the violated side of the root and the modes are re-decided there
 (:func:`wetclutch.sim.modes.settle`). Time events (steps and ramp corners of the
 signals, PWM edges) end a step exactly; the modes are re-decided with the right limit.
@@ -19,10 +21,10 @@ import numpy as np
 from ..physics import actuator as act_
 from . import signals
 from .compiled import jit, jit_inline
-from .dopri import C, dense, error_norm, stage
+from .dopri import C, component, dense, error_norm, stage, weights
 from .modes import forget, settle, stale
-from .rhs import copy, events, rhs, rhs_call, slip
-from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T,
+from .rhs import copy, events, rhs, rhs_call
+from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_AMP, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T,
                         GRIP, IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE, IS_STEPS, IS_SWITCHES,
                         LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
 
@@ -38,13 +40,19 @@ def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
 @jit
 def _event_value(e, theta_t, t_old, h, y_old, ws, net, ext):
     """Event function ``e`` at ``theta_t`` inside the last step (fixed modes). A sliding clutch's slip through zero
-    is a function of the state alone, which the dense output gives; every other event needs the right-hand
-    side's torques. Either way the value is the one :func:`_eval_at` gives. A real call, as the evaluation was:
+    is a function of the state alone, which the dense output gives, and the valve amplifier's one of the coil
+    current and the input; every other event needs the right-hand side's torques. Either way the value is the one :func:`_eval_at` gives. A real call, as the evaluation was:
     inlined, the dense output would add to the integrator's compile time."""
-    j = e // 2
-    if e < 2 * net.cl_a.shape[0] and e % 2 == 0 and net.cl_oneway[j] == 0 and (ws.clm[j] == 1 or ws.clm[j] == -1):
-        dense(y_old, ws.K, h, (theta_t - t_old) / h, ws.y_tmp, ws.bw)
-        return ws.clm[j] * slip(ws.y_tmp, net, j)
+    j = _sliding(e, ws, net)
+    if j >= 0:
+        return ws.clm[j] * _slip_at((theta_t - t_old) / h, j, y_old, h, ws, net)
+    a = net.act
+    if a.shape[0] > 0 and e == ws.g_old.shape[0] - 1:
+        # the valve amplifier's (the last event function): the coil current and the input alone
+        weights((theta_t - t_old) / h, ws.bw)
+        cur = component(y_old, ws.K, h, ws.bw, int(a[act_.STATE]) + act_.CURRENT)
+        u = signals.value(int(a[act_.U_SIG]), theta_t, False, net.sig, net.tab, ext)
+        return act_.amplifier_event(cur, u, a, ws.fstate[FS_AMP])
     _eval_at(theta_t, t_old, h, y_old, ws, net, ext)
     return ws.g_new[e]
 
@@ -171,47 +179,111 @@ def _step_limit(t, t_stop, h_max, bp_i, pwm, ws, net):
 
 
 @jit_inline
+def _sliding(e, ws, net):
+    """The clutch whose slip through zero is event ``e`` while it slides (-1: ``e`` is another event)."""
+    j = e // 2
+    if e < 2 * net.cl_a.shape[0] and e % 2 == 0 and net.cl_oneway[j] == 0 and (ws.clm[j] == 1 or ws.clm[j] == -1):
+        return j
+    return -1
+
+
+@jit_inline
+def _dip(e, t, h, y_old, ws, net):
+    """A sliding clutch whose slip falls towards zero at a step's start and rises at its end has its least slip
+    inside: if that dips through zero, the slip crossed zero and back within the step (a valve stem that
+    stops for an instant), which the event functions' signs at the step's ends do not show. Returns the
+    time of the least ``m * slip`` on the dense output and its value (``inf``, 1: no dip)."""
+    j = _sliding(e, ws, net)
+    if j < 0:
+        return np.inf, 1.0
+    m = ws.clm[j]
+    a = net.cl_a[j]
+    b = net.cl_b[j]
+    d0 = ws.K[0, a] - (ws.K[0, b] if b >= 0 else 0.0)
+    d1 = ws.K[6, a] - (ws.K[6, b] if b >= 0 else 0.0)
+    if not (m * d0 < 0.0 and m * d1 > 0.0):
+        return np.inf, 1.0
+    # golden-section search for the least slip on the dense output (its slip is smooth within the step)
+    lo = 0.0
+    hi = 1.0
+    r = 0.6180339887498949
+    g_best = np.inf
+    th_best = 0.5
+    for _ in range(30):
+        th1 = hi - r * (hi - lo)
+        th2 = lo + r * (hi - lo)
+        g1 = m * _slip_at(th1, j, y_old, h, ws, net)
+        g2 = m * _slip_at(th2, j, y_old, h, ws, net)
+        if g1 < g_best:
+            g_best, th_best = g1, th1
+        if g2 < g_best:
+            g_best, th_best = g2, th2
+        if g_best < 0.0:
+            break
+        if g1 < g2:
+            hi = th2
+        else:
+            lo = th1
+    return t + th_best * h, g_best
+
+
+@jit_inline
+def _slip_at(theta, j, y_old, h, ws, net):
+    """Clutch ``j``'s slip on the last step's dense output at ``theta`` (its two speeds only)."""
+    weights(theta, ws.bw)
+    b = net.cl_b[j]
+    w_b = component(y_old, ws.K, h, ws.bw, b) if b >= 0 else 0.0
+    return component(y_old, ws.K, h, ws.bw, net.cl_a[j]) - w_b
+
+
+@jit_inline
 def _locate_event(t, t_new, h, y_old, ws, net, ext):
     """The earliest event in ``(t, t_new]`` and its event function (``inf``, -1: none).
 
     Brackets ``[ta, tb]`` with ``g(ta) >= 0 > g(tb)``, refined by the Illinois method to
-    1e-13 s on the dense output.
+    1e-13 s on the dense output. A sliding clutch's slip that dips through zero and back within
+    the step is bracketed at its least value (:func:`_dip`).
     """
     t_ev = np.inf
     e_ev = -1
     for e in range(ws.g_old.shape[0]):
-        if ws.g_old[e] >= 0.0 and ws.g_new[e] < 0.0:
-            ta = t
-            ga = ws.g_old[e]
-            tb = t_new if t_ev == np.inf else t_ev
-            if tb < t_new:
-                gb = _event_value(e, tb, t, h, y_old, ws, net, ext)
-                if gb >= 0.0:
-                    continue
+        if ws.g_old[e] < 0.0:
+            continue
+        tb = t_new
+        gb = ws.g_new[e]
+        if gb >= 0.0:
+            tb, gb = _dip(e, t, h, y_old, ws, net)
+            if gb >= 0.0:
+                continue
+        ta = t
+        ga = ws.g_old[e]
+        if tb > t_ev:
+            tb = t_ev
+            gb = _event_value(e, tb, t, h, y_old, ws, net, ext)
+            if gb >= 0.0:
+                continue
+        side = 0
+        for _ in range(100):
+            if tb - ta <= 1e-13 * max(1.0, abs(tb)):
+                break
+            tm = (ta * gb - tb * ga) / (gb - ga)
+            if not (ta < tm < tb):
+                tm = 0.5 * (ta + tb)
+            gm = _event_value(e, tm, t, h, y_old, ws, net, ext)
+            if gm >= 0.0:
+                ta = tm
+                ga = gm
+                if side == -1:
+                    gb *= 0.5
+                side = -1
             else:
-                gb = ws.g_new[e]
-            side = 0
-            for _ in range(100):
-                if tb - ta <= 1e-13 * max(1.0, abs(tb)):
-                    break
-                tm = (ta * gb - tb * ga) / (gb - ga)
-                if not (ta < tm < tb):
-                    tm = 0.5 * (ta + tb)
-                gm = _event_value(e, tm, t, h, y_old, ws, net, ext)
-                if gm >= 0.0:
-                    ta = tm
-                    ga = gm
-                    if side == -1:
-                        gb *= 0.5
-                    side = -1
-                else:
-                    tb = tm
-                    gb = gm
-                    if side == 1:
-                        ga *= 0.5
-                    side = 1
-            t_ev = tb
-            e_ev = e
+                tb = tm
+                gb = gm
+                if side == 1:
+                    ga *= 0.5
+                side = 1
+        t_ev = tb
+        e_ev = e
     return t_ev, e_ev
 
 

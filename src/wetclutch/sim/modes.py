@@ -14,9 +14,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..physics import actuator as act_
+from . import signals
 from .compiled import jit, jit_inline
 from .rhs import LIM_MAX, LIM_MIN, capacity, hold_margins, rate_command, ratio, rhs_call, slip, static_limit
-from .workspace import FREE, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets, fs_grip, fs_ratio
+from .workspace import FREE, FS_AMP, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets, fs_grip, fs_ratio
 
 
 @jit_inline
@@ -234,7 +236,8 @@ def _lock_backsliding(x, dx, net, clm, released):
 
 @jit
 def settle(t, net, ext, ws):
-    """Decide consistent modes at time ``t`` for the workspace's state; project newly locked speeds.
+    """Decide consistent modes at time ``t`` for the workspace's state; project newly locked speeds. The valve
+    amplifier's mode follows from the state and the input alone.
 
     Uses ``ws.x``, ``ws.clm``, ``ws.grm`` (updated), ``ws.dx``, ``ws.aux`` and the constraint
     buffers. Returns -1 if the system is singular, 1 if ``ws.dx`` and ``ws.aux`` are those of the
@@ -248,6 +251,9 @@ def settle(t, net, ext, ws):
     nc = net.cl_a.shape[0]
     ng = net.gr_in.shape[0]
     _first_guess(t, x, net, ext, clm, grm)
+    if net.act.shape[0] > 0:
+        u = signals.value(int(net.act[act_.U_SIG]), t, False, net.sig, net.tab, ext)
+        ws.fstate[FS_AMP] = act_.amplifier_mode(x, net.act, u)
     # a clutch or gear released in this settle must not be re-locked (no cycling)
     released[:] = 0
     redundant = False

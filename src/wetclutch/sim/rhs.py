@@ -33,8 +33,8 @@ from ..physics import thermal as th_
 from . import signals
 from .compiled import jit, jit_inline
 from .linalg import lu_factor, lu_solve, svd_jacobi
-from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, IS_BAD_BODY, IS_REDUNDANT, LOCKED, STUCK, aux_offsets,
-                        fs_grip, fs_ratio)
+from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, FS_AMP, FS_AMP_G, IS_BAD_BODY, IS_REDUNDANT, LOCKED,
+                        STUCK, aux_offsets, fs_grip, fs_ratio)
 
 # columns of NetArrays.gr_lim: a moving ratio's limits and its rate limit (1/s)
 LIM_MIN, LIM_MAX, LIM_RATE = 0, 1, 2
@@ -100,6 +100,15 @@ def _ratio_rates(t, left, net, ext, dx, fstate):
         fstate[o + ng + g] = rate
         dx[k] = 0.0 if fstate[o + g] != 0.0 else rate
     return moving
+
+
+@jit_inline
+def moving(net):
+    """Whether the network has a gear whose ratio moves (a state)."""
+    for g in range(net.gr_in.shape[0]):
+        if net.gr_state[g] >= 0:
+            return True
+    return False
 
 
 @jit_inline
@@ -428,7 +437,7 @@ def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
         # the actuator's states' rates into dx, its force on the valve stem into z and its power into p_src
         # (here, not in a helper of its own: each level of inlining copies the actuator's whole IR once more)
         u = signals.value(int(net.act[act_.U_SIG]), t, left, net.sig, net.tab, ext)
-        f_stem, _ = act_.evaluate(x, net.act, u, ext, dx, full)
+        f_stem, _, ws.fstate[FS_AMP_G] = act_.evaluate(x, net.act, u, ext, dx, full, ws.fstate[FS_AMP])
         stem = int(net.act[act_.STEM_BODY])
         z[stem] += f_stem
         p_src += f_stem * x[stem]
@@ -492,7 +501,8 @@ def static_limit(net, j, cap, grip):
 
 @jit_inline
 def events(x, aux, net, clm, grm, g, fstate):
-    """Event functions into ``g``: each is >= 0 while the current modes are valid."""
+    """Event functions into ``g``: each is >= 0 while the current modes are valid. The valve amplifier's is
+    the one the right-hand side stored in ``fstate`` when it last ran, which must have been at ``x``."""
     nc = net.cl_a.shape[0]
     ng = net.gr_in.shape[0]
     o_grip = fs_grip(nc, ng)
@@ -523,14 +533,19 @@ def events(x, aux, net, clm, grm, g, fstate):
         else:
             g[2 * nc + 2 * k] = grm[k] * lam * x[net.gr_out[k]]
             g[2 * nc + 2 * k + 1] = 1.0
-    if g.shape[0] > 2 * nc + 2 * ng:
+    e = 2 * nc + 2 * ng
+    if moving(net):
         # moving ratios: each stays within its limits; held at one, its command keeps pushing beyond
         o = fs_ratio(nc) + ng
         for k in range(ng):
             i = net.gr_state[k]
             if i < 0:
-                g[2 * nc + 2 * ng + k] = 1.0
+                g[e + k] = 1.0
             elif fstate[o + k] != 0.0:
-                g[2 * nc + 2 * ng + k] = fstate[o + k] * fstate[o + ng + k]
+                g[e + k] = fstate[o + k] * fstate[o + ng + k]
             else:
-                g[2 * nc + 2 * ng + k] = min(x[i] - net.gr_lim[k, LIM_MIN], net.gr_lim[k, LIM_MAX] - x[i])
+                g[e + k] = min(x[i] - net.gr_lim[k, LIM_MIN], net.gr_lim[k, LIM_MAX] - x[i])
+        e += ng
+    if net.act.shape[0] > 0:
+        # the valve amplifier's mode: its function as the right-hand side last evaluated it (at ``x``)
+        g[e] = fstate[FS_AMP_G]

@@ -40,7 +40,9 @@ FS_LOG_ERR = 2  # log of the previous accepted step's error (PI step control)
 FS_PWM_NEXT = 3  # time of the next PWM edge (-inf: not started)
 FS_PWM_START = 4  # start of the current PWM period
 FS_PWM_H = 5  # + level (0 or 1): the first step after the last edge to that level (0: none yet)
-FS_LOCKS = 7  # + 2 j + LOCK_FIRST / LOCK_LAST: first and last time clutch j locked (-1: never)
+FS_AMP = 7  # the valve amplifier's mode (actuator.REGULATE, SATURATED, FREEWHEEL; decided at restarts)
+FS_AMP_G = 8  # its event function at the last evaluation of the right-hand side
+FS_LOCKS = 9  # + 2 j + LOCK_FIRST / LOCK_LAST: first and last time clutch j locked (-1: never)
 LOCK_FIRST, LOCK_LAST = 0, 1
 N_FSTATE = FS_LOCKS  # without the lock times, which follow, two per clutch, the gears' slots (fs_ratio) and the
 # clutches' grip margins (fs_grip)
@@ -95,6 +97,13 @@ GRIP = 1e-9
 def moving_gears(net) -> int:
     """Number of gears of the compiled network ``net`` whose ratio moves (a state)."""
     return int(np.count_nonzero(net.gr_state >= 0))
+
+
+def n_events(net) -> int:
+    """Number of event functions of the compiled network ``net``: two per clutch and per gear, one per moving
+    ratio (its limits; none without moving ratios), one for a valve amplifier (its regulating range)."""
+    nc, ng = net.cl_a.size, net.gr_in.size
+    return 2 * nc + 2 * ng + (ng if moving_gears(net) else 0) + (1 if net.act.size else 0)
 
 
 def aux_size(nc: int, ng: int, ns: int) -> int:
@@ -165,8 +174,8 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
         dx=np.zeros(nx),
         aux=np.zeros(max(naux, 1)),
         aux_new=np.zeros(max(naux, 1)),
-        g_old=np.zeros(max(2 * nc + 2 * ng + n_mov, 1)),
-        g_new=np.zeros(max(2 * nc + 2 * ng + n_mov, 1)),
+        g_old=np.zeros(max(n_events(net), 1)),
+        g_new=np.zeros(max(n_events(net), 1)),
         A=np.zeros((3 * max(nmat, 1) + 1, max(nmat, 1))),
         z=np.zeros(max(nmat, 1)),
         piv=np.zeros(max(nmat, 1), dtype=np.int64),
