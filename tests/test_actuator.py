@@ -320,3 +320,29 @@ def test_the_stem_speed_tolerance_keeps_the_dithered_valve_accurate_in_fewer_ste
     assert steps[1] < 0.8 * steps[0]
     assert err[1] < 2.0 * err[0]
     assert ref.stats["events"] == per_state.stats["events"]  # the same stick/slip history
+
+
+@pytest.mark.parametrize(("u1", "u2"), [(4.0, 1.0), (1.0, 4.0)])
+def test_coil_current_through_the_amplifier_stage_limits_follows_the_closed_form(u1, u2):
+    # a DC input step from u1 to u2 at 1 s, the current settled at g u1 before it. The current controller's
+    # voltage v = R i_ref + K (i_ref - i) is out of the stage's range at first: going down it is negative, the
+    # transistor blocks and the current decays through the freewheel, di/dt = -(R + R_fw) i / L, until v = 0
+    # at i* = i_ref (R + K) / K; going up the stage saturates, di/dt = (V - R i) / L, until v = V at
+    # i* = (i_ref (R + K) - V) / K. Then it regulates: i -> i_ref with the rate (R + K) / L.
+    v = wc.Params().valve
+    R, L, K, g = v.R_coil, v.L_coil, v.amp_gain, v.g_current
+    i0, i_ref = g * u1, g * u2
+    if u2 < u1:
+        rate, i_inf, i_sw = (R + v.R_freewheel) / L, 0.0, i_ref * (R + K) / K
+    else:
+        rate, i_inf, i_sw = R / L, v.V_supply / R, (i_ref * (R + K) - v.V_supply) / K
+    t_sw = np.log((i0 - i_inf) / (i_sw - i_inf)) / rate
+    assert 1e-3 < t_sw < 1e-2  # the stage limit holds for some ms: a real test of both pieces
+
+    rn = clutch.build(wc.Params(), Step(1.0, u1, u2), temp_C=85.0)
+    tr = integrate(rn.network, 1.03, dt_out=1e-4)
+    s = tr.t[tr.t >= 1.0] - 1.0
+    cur = tr.x[tr.t >= 1.0, rn.network.actuator_state + A.CURRENT]
+    exact = np.where(s < t_sw, i_inf + (i0 - i_inf) * np.exp(-rate * s),
+                     i_ref + (i_sw - i_ref) * np.exp(-(R + K) / L * (s - t_sw)))
+    assert np.max(np.abs(cur - exact)) < 1e-8  # A, of 0.2-0.8 A
