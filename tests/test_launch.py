@@ -184,3 +184,24 @@ def test_a_heavy_clutch_output_ringing_at_a_low_ratio_does_not_keep_ringing(oil_
     cond = launch.Conditions(t_ref=t_ref, oil_temp_C=oil_temp_C, seed=seed)
     res = launch.simulate(plant, designs.cached(Params()), cond)
     assert res.summary["ripple_pct"] < metrics.REQ_RIPPLE_PCT
+
+
+def test_the_plates_touch_no_sooner_than_the_full_input_fill_allows():
+    # The valve's full input from t = 0 is the fastest fill there is: ``design.fill_times`` strokes the piston
+    # through 60 % of its travel that way (an open-loop run), so the plates' first contact (the true clutch torque)
+    # comes later in any launch. Warm oil fills within 0.1 s, long before the request at 1 s; cold oil through a
+    # feed line 1.5 times as long into a volume 1.3 times as large is still stroking at the request, and the
+    # response, which cannot start before the contact, counts the rest of the fill.
+    p = Params()
+    slow = params_load(overrides={"hydraulics.x_contact": 1.3 * p.hydraulics.x_contact,
+                                  "hydraulics.line_length": 1.5 * p.hydraulics.line_length})
+    for plant, temp in ((p, 85.0), (slow, 10.0)):
+        fill = float(designs.fill_times(plant, np.array([temp]))[0])
+        cond = launch.Conditions(t_ref=50.0, oil_temp_C=temp)
+        s = launch.simulate(plant, "launch", cond, nominal=metrics.Response.empty()).summary
+        assert cond.t_request + s["contact_s"] > fill
+        if temp > 50.0:
+            assert s["contact_s"] < 0.0
+        else:
+            assert fill > 0.6 and s["contact_s"] > 0.0
+            assert s["t95_settled_s"] > s["contact_s"]

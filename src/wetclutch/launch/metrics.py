@@ -33,6 +33,9 @@ static value ``T_ss``
 ``jerk_max``
     Largest rate of change of the smoothed ``T_r`` (N m/s) between the request
     and synchronisation: the vehicle's jerk is this over its inertia.
+``contact_s``
+    From the request to the plates' first contact (the simulation's true clutch torque, which a rig does not
+    measure): positive where the fill was not complete when torque was asked for.
 ``creep_Nm``
     Mean of ``T_r`` over the last :data:`CREEP_WINDOW` before the request: what the clutch
     in standby pushes into a waiting vehicle.
@@ -176,8 +179,19 @@ def requirements(r: Response, nominal: Response) -> dict[str, bool]:
     }
 
 
-def summary(r: Response, nominal: Response, slip_energy: float, t_sync: float | None) -> dict[str, Any]:
-    """The ``summary.json`` figures of a launch."""
+def first_contact(t: np.ndarray, T_c: np.ndarray, t_req: float) -> float | None:
+    """Time (s) from the request to the first sample with torque on the plates (``T_c``, the simulation's true
+    clutch torque, exactly zero while they are open); negative when they touched before it, as a fill is
+    meant to; None if they never did. Positive: the fill was not complete when torque was asked for, and the
+    response time counts the rest of it."""
+    touched = np.flatnonzero(T_c != 0.0)
+    return float(t[touched[0]] - t_req) if touched.size else None
+
+
+def summary(r: Response, nominal: Response, slip_energy: float, t_sync: float | None,
+            contact: float | None = None) -> dict[str, Any]:
+    """The ``summary.json`` figures of a launch; ``contact`` is the time (s) from the request to the plates' first
+    contact (:func:`first_contact`)."""
     req = requirements(r, nominal)
     d = asdict(r)
     d.pop("window")
@@ -186,6 +200,7 @@ def summary(r: Response, nominal: Response, slip_energy: float, t_sync: float | 
         "steady_window_s": list(r.window),
         "slip_energy_J": slip_energy,
         "t_sync_s": t_sync,
+        "contact_s": contact,
         "nominal_t95_settled_s": None if not np.isfinite(nominal.t95_settled_s) else nominal.t95_settled_s,
         "nominal_overshoot_pct": None if not np.isfinite(nominal.overshoot_pct) else nominal.overshoot_pct,
         "requirements": req,

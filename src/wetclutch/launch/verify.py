@@ -36,7 +36,7 @@ NOMINAL_LEVELS = np.array([25.0, 50.0, 100.0, 150.0, 200.0])
 SLAM_FACTOR = 1.5
 N_BINS = 4
 METRICS = ("steady_state_error_pct", "t95_s", "t95_settled_s", "overshoot_pct", "ripple_pct", "jerk_max", "creep_Nm", "standby_peak_Nm",
-           "slip_energy_J", "t_sync_s")
+           "slip_energy_J", "t_sync_s", "contact_s")
 
 
 @dataclass(frozen=True)
@@ -274,6 +274,8 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         "sequence": ctx.sequence,
         "pass_rate_first_launch": sum(r["first_all_pass"] for r in results) / total if total else float("nan"),
         "slams": sum(r["slams"] for r in results),
+        # failures whose plates first touched after the request: the fill was not complete when torque was asked for
+        "failures_unfilled": sum(1 for r in results if not r["all_pass"] and (r["metrics"].get("contact_s") or 0.0) > 0),
         "bins": bins(results, ctx.ranges),
         "percentiles": pct,
         "worst": [{k: r[k] for k in ("index", "values", "metrics", "requirements", "replay")} for r in worst],
