@@ -539,7 +539,7 @@ def _event_source(network: Network, e: int) -> str:
     if 0 <= e < 2 * nc:
         return f"clutch {network.clutches[e // 2].name!r}"
     ng = len(network.gears)
-    n_mov = ng if any(g.rate is not None for g in network.gears) else 0
+    n_mov = ng if network._moving() else 0
     if e >= 2 * nc + 2 * ng + n_mov:
         return "the valve amplifier (its regulating range)"
     if e >= 2 * nc + 2 * ng:

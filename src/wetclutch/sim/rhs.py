@@ -103,15 +103,6 @@ def _ratio_rates(t, left, net, ext, dx, fstate):
 
 
 @jit_inline
-def moving(net):
-    """Whether the network has a gear whose ratio moves (a state)."""
-    for g in range(net.gr_in.shape[0]):
-        if net.gr_state[g] >= 0:
-            return True
-    return False
-
-
-@jit_inline
 def _ratios_moved(x, net, fstate):
     """Whether a moving ratio differs from the one the constraint factors were made with."""
     o = fs_ratio(net.cl_a.shape[0])
@@ -534,7 +525,8 @@ def events(x, aux, net, clm, grm, g, fstate):
             g[2 * nc + 2 * k] = grm[k] * lam * x[net.gr_out[k]]
             g[2 * nc + 2 * k + 1] = 1.0
     e = 2 * nc + 2 * ng
-    if moving(net):
+    n_amp = 1 if net.act.shape[0] > 0 else 0
+    if g.shape[0] - n_amp > e:
         # moving ratios: each stays within its limits; held at one, its command keeps pushing beyond
         o = fs_ratio(nc) + ng
         for k in range(ng):
@@ -546,6 +538,6 @@ def events(x, aux, net, clm, grm, g, fstate):
             else:
                 g[e + k] = min(x[i] - net.gr_lim[k, LIM_MIN], net.gr_lim[k, LIM_MAX] - x[i])
         e += ng
-    if net.act.shape[0] > 0:
+    if n_amp:
         # the valve amplifier's mode: its function as the right-hand side last evaluated it (at ``x``)
         g[e] = fstate[FS_AMP_G]
