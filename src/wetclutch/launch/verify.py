@@ -275,7 +275,7 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         "pass_rate_first_launch": sum(r["first_all_pass"] for r in results) / total if total else float("nan"),
         "slams": sum(r["slams"] for r in results),
         # failures whose plates first touched after the request: the fill was not complete when torque was asked for
-        "failures_unfilled": sum(1 for r in results if not r["all_pass"] and (r["metrics"].get("contact_s") or 0.0) > 0),
+        "failures_unfilled": sum(1 for r in results if not r["all_pass"] and (r["metrics"].get("contact_s") or 0) > 0),
         "bins": bins(results, ctx.ranges),
         "percentiles": pct,
         "worst": [{k: r[k] for k in ("index", "values", "metrics", "requirements", "replay")} for r in worst],

@@ -24,9 +24,9 @@ from .compiled import jit, jit_inline
 from .dopri import C, component, dense, error_norm, stage, weights
 from .modes import forget, settle, stale
 from .rhs import copy, events, rhs, rhs_call
-from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_AMP, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T,
-                        GRIP, IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE, IS_STEPS, IS_SWITCHES,
-                        LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
+from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_AMP, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT,
+                        FS_PWM_START, FS_T, GRIP, IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE,
+                        IS_STEPS, IS_SWITCHES, LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
 
 
 @jit_inline
@@ -41,8 +41,9 @@ def _eval_at(theta_t, t_old, h, y_old, ws, net, ext):
 def _event_value(e, theta_t, t_old, h, y_old, ws, net, ext):
     """Event function ``e`` at ``theta_t`` inside the last step (fixed modes). A sliding clutch's slip through zero
     is a function of the state alone, which the dense output gives, and the valve amplifier's one of the coil
-    current and the input; every other event needs the right-hand side's torques. Either way the value is the one :func:`_eval_at` gives. A real call, as the evaluation was:
-    inlined, the dense output would add to the integrator's compile time."""
+    current and the input; every other event needs the right-hand side's torques. Either way the value is the
+    one :func:`_eval_at` gives. A real call, as the evaluation was: inlined, the dense output would add to the
+    integrator's compile time."""
     j = _sliding(e, ws, net)
     if j >= 0:
         return ws.clm[j] * _slip_at((theta_t - t_old) / h, j, y_old, h, ws, net)
