@@ -56,7 +56,6 @@ def test_measured_is_noisy_truth_at_the_rate(step_run):
 def test_every_experiment_runs(experiment):
     res = rig.run(experiment, config="valve-only", input_mode="pwm", level=0.3, from_=0.05, t_end=4.0, noise=False)
     u, p = res.truth.u, res.truth.p_clutch
-    assert np.ptp(u) > 0.05 and np.all(np.isfinite(p))
     # the command reaches the valve: its pressure swings by more than a bar and rises with the duty cycle
     assert np.ptp(p) > 1e5 and np.corrcoef(u, p)[0, 1] > 0.5
 
