@@ -235,7 +235,12 @@ def amplifier_event(cur, u, act, mode):
     stage's range, above it, or below zero). PWM: 1 (its edges are time events)."""
     if act[MODE] == PWM:
         return 1.0
-    v = _regulator_voltage(cur, u, act)
+    return _range_margin(_regulator_voltage(cur, u, act), act, mode)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def _range_margin(v, act, mode):
+    """The DC amplifier's event function at the controller's voltage ``v`` (:func:`amplifier_event`)."""
     if mode == SATURATED:
         return v - act[V_SUP]
     if mode == FREEWHEEL:
@@ -260,12 +265,16 @@ def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE):
     if act[MODE] == PWM:
         # low part of a period: the current freewheels through the diode (about 0 V)
         v = act[V_SUP] if ext[int(act[PWM_EXT])] > 0.5 else 0.0
-    elif mode == SATURATED:
-        v = act[V_SUP]
-    elif mode == FREEWHEEL:
-        v = -act[R_FW] * cur  # output transistor blocks: freewheel
+        g_amp = 1.0
     else:
-        v = _regulator_voltage(cur, u, act)
+        v_reg = _regulator_voltage(cur, u, act)
+        g_amp = _range_margin(v_reg, act, mode)
+        if mode == SATURATED:
+            v = act[V_SUP]
+        elif mode == FREEWHEEL:
+            v = -act[R_FW] * cur  # output transistor blocks: freewheel
+        else:
+            v = v_reg
     # constant reciprocals: the divide then runs off the dependency chain of the state
     cur_dot = (v - act[R_COIL] * cur) * (1.0 / act[L_COIL])
     dx[i0 + CURRENT] = cur_dot
@@ -316,7 +325,7 @@ def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE):
     dp_in = act[P_SUP] - p - act[R_LINE] * q_in
     f_flow = act[K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * pp)
     f_stem = f_mag + act[F_PRE] - act[A_FB] * feedback_pressure(p, q_fb, act) - f_flow
-    return f_stem, normal_force(p, act), amplifier_event(cur, u, act, mode)
+    return f_stem, normal_force(p, act), g_amp
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
