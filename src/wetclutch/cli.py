@@ -36,6 +36,12 @@ def _param_args(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _lockup_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--through-lockup", action="store_true",
+                   help="run every verified launch to lock-up, for lock-up times and slip energies (default: "
+                        "only as far past the request as the requirements judge, with the same verdicts; faster)")
+
+
 def _scheduler_arg(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run the launches on this dask.distributed scheduler, e.g. tcp://10.0.0.5:8786 "
@@ -212,7 +218,7 @@ def _cmd_verify(args: argparse.Namespace) -> None:
     d = _design(args, p, origin)
     res = verify.run(d, p, args.samples, args.seed, args.workers, rs, progress=not args.quiet,
                      replay_args=_replay_args(args, "controller.toml"), sequence=args.sequence,
-                     scheduler=args.scheduler)
+                     scheduler=args.scheduler, through_lockup=args.through_lockup)
     verify_report.write(res, args.out, d)
     seq = (f"; after {args.sequence} launches of each clutch (first launch {100 * res['pass_rate_first_launch']:.1f} %,"
            f" {res['slams']} slams)" if args.sequence > 1 else "")
@@ -236,7 +242,7 @@ def _cmd_report(args: argparse.Namespace) -> None:
     job = campaign.main_job(p, d, b, rs, args.samples, args.baseline_samples, args.seed, args.workers,
                             progress=not args.quiet, replay_args=_replay_args(args, "controller.toml"),
                             baseline_replay_args=_replay_args(args, "baseline.toml"), scheduler=args.scheduler,
-                            sequence=args.sequence)
+                            sequence=args.sequence, through_lockup=args.through_lockup)
     s = report.write(job, args.out)
     same = s["same_samples"]
     print(f"report: launch controller meets all requirements in {100 * s['verify']['pass_rate']:.1f} % of "
@@ -394,6 +400,7 @@ def build_parser() -> argparse.ArgumentParser:
     ver.add_argument("--ranges", metavar="R.toml", help="what varies and how (default: the shipped ranges file)")
     ver.add_argument("--sequence", type=int, default=1, metavar="N",
                      help="launches per sample, the adaptation carried over; judged on the last (default 1)")
+    _lockup_arg(ver)
     _controller_args(ver)
     _param_args(ver)
     ver.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -412,6 +419,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="launches per verified clutch, the adaptation carried over; judged on the last (default 3)")
     rep.add_argument("--controller-file", metavar="C.toml", help="the launch controller (default: designed on the plant)")
     rep.add_argument("--baseline-file", metavar="B.toml", help="the baseline (default: designed on the plant)")
+    _lockup_arg(rep)
     _param_args(rep)
     rep.add_argument("--quiet", action="store_true")
     rep.set_defaults(func=_cmd_report)

@@ -33,14 +33,14 @@ class MainJob:
 def main_job(plant: Params, design: Design, baseline: Design, ranges: list[Range] | None = None, samples: int = 1000,
              baseline_samples: int = 200, seed: int = 0, workers: int | None = None, progress: bool = True,
              replay_args: str = "", baseline_replay_args: str = "", scheduler: str | None = None,
-             sequence: int = 1) -> MainJob:
+             sequence: int = 1, through_lockup: bool = False) -> MainJob:
     """Run the main job on ``plant`` (see :mod:`wetclutch.report.main` for what is written).
 
     The baseline's samples are the first ``baseline_samples`` of the design's (same seed,
     same ranges), so that the two are compared on the same plants. ``replay_args`` and
     ``baseline_replay_args``: the options each replay command carries. ``scheduler``: a
     ``dask.distributed`` scheduler to run the verifications on, ``sequence`` the launches per
-    sample (see :func:`verify.run`).
+    sample and ``through_lockup`` whether verified launches run to lock-up (see :func:`verify.run`).
     """
     # refuse bad options before minutes of launches, not after
     verify.check_options(samples, seed, workers)
@@ -51,9 +51,10 @@ def main_job(plant: Params, design: Design, baseline: Design, ranges: list[Range
             cond = loop.Conditions(t_ref=t_ref, oil_temp_C=temp)
             launches.append((loop.simulate(plant, design, cond), loop.simulate(plant, baseline, cond)))
     ver = verify.run(design, plant, samples, seed, workers, ranges, progress=progress, replay_args=replay_args,
-                     scheduler=scheduler, sequence=sequence)
+                     scheduler=scheduler, sequence=sequence, through_lockup=through_lockup)
     base = verify.run(baseline, plant, baseline_samples, seed, workers, ranges, progress=progress,
-                      replay_args=baseline_replay_args, scheduler=scheduler, sequence=sequence)
+                      replay_args=baseline_replay_args, scheduler=scheduler, sequence=sequence,
+                      through_lockup=through_lockup)
     rs = ranges if ranges is not None else load_ranges()
     return MainJob(plant, design, baseline, launches, ver, base, margins.over_corners(baseline, plant, rs),
                    margins.launch_over_corners(design, plant, rs))

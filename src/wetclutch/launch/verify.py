@@ -11,6 +11,14 @@ can be replayed with ``wetclutch launch`` (the ``replay`` field).
 The result (:func:`run`) holds the pass rate of every requirement, overall and per
 range bin (:data:`N_BINS` equal bins of each range: where it fails, not only how often),
 metric percentiles, the worst cases and every sample.
+
+The requirements judge a launch's response up to :data:`wetclutch.launch.metrics.STEADY_END`
+after the request (and its standby before it), so a verification launch stops
+:data:`HORIZON` after the request: the simulation up to then is the same, step for step,
+as that of the whole launch, and so is every requirement's verdict and the adaptation a
+sequence carries over, in a fraction of the time (a cold, gentle launch slips for ten
+seconds before lock-up). Lock-up time and slip energy then remain unknown (None);
+``through_lockup`` runs every launch to its lock-up, as ``wetclutch launch`` does.
 """
 
 from __future__ import annotations
@@ -34,6 +42,11 @@ from .design import Design
 NOMINAL_LEVELS = np.array([25.0, 50.0, 100.0, 150.0, 200.0])
 #: a launch whose torque peaks above this multiple of the steady value slams
 SLAM_FACTOR = 1.5
+#: how long after the request a verification launch runs (s), unless it is run through lock-up: the end of the
+#: requirements' steady window and half a second beyond
+HORIZON = metrics.STEADY_END + 0.5
+#: figures that need the launch run to lock-up
+LOCKUP_METRICS = ("slip_energy_J", "t_sync_s")
 N_BINS = 4
 METRICS = ("steady_state_error_pct", "t95_s", "t95_settled_s", "overshoot_pct", "ripple_pct", "jerk_max", "creep_Nm", "standby_peak_Nm",
            "slip_energy_J", "t_sync_s", "contact_s")
@@ -59,13 +72,15 @@ class Context:
     profile: str = "step"
     replay_args: str = ""
     sequence: int = 1
+    through_lockup: bool = False
 
     def case(self, sample: Sample) -> tuple[Params, launch.Conditions]:
         plant, cond = ranges_mod.apply(self.ranges, sample.values, self.plant)
         base = launch.Conditions()
+        t_max = base.t_max if self.through_lockup else min(base.t_max, base.t_request + HORIZON)
         return plant, launch.Conditions(t_ref=cond.get("t_ref", base.t_ref), oil_temp_C=cond.get("oil_temp_C"),
                                         profile=self.profile, seed=sample.seed,
-                                        noise_scale=cond.get("noise_scale", base.noise_scale))
+                                        noise_scale=cond.get("noise_scale", base.noise_scale), t_max=t_max)
 
     def replay(self, sample: Sample, plant: Params, cond: launch.Conditions) -> str:
         """The ``wetclutch launch`` command that runs ``sample`` (its plant and conditions from :meth:`case`) again."""
@@ -123,7 +138,7 @@ def run_sample(ctx: Context, sample: Sample, grid: tuple[np.ndarray, np.ndarray]
         seq = [r.summary for r in launch.sequence(plant, ctx.design, cond, ctx.sequence,
                                                   nominal=_nominal_at(grid, cond.t_ref))]
         s = seq[-1]
-        figures = {k: s[k] for k in METRICS}
+        figures = {k: None if k in LOCKUP_METRICS and not ctx.through_lockup else s[k] for k in METRICS}
         req, error = s["requirements"], None
     except WetclutchError as e:
         figures, req, error = {}, {k: False for k in metrics.REQUIREMENTS}, str(e)
@@ -160,7 +175,7 @@ def check_options(n: int, seed: int, workers: int | None, samples_option: str = 
 def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 0, workers: int | None = None,
         ranges: list[ranges_mod.Range] | None = None, corners: bool = True, profile: str = "step",
         progress: bool = True, replay_args: str = "", sequence: int = 1,
-        scheduler: str | None = None) -> dict[str, Any]:
+        scheduler: str | None = None, through_lockup: bool = False) -> dict[str, Any]:
     """Verify ``design`` on ``n`` random samples (plus corners) around ``plant``; returns the ``verify.json`` content.
 
     Parameters
@@ -179,6 +194,9 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
         A ``dask.distributed`` scheduler to run the samples on (default ``$DASK_SCHEDULER_ADDRESS``;
         neither: local processes); the result is the same bit for bit
         (:mod:`wetclutch.launch.distributed`).
+    through_lockup
+        Run every launch to its lock-up (lock-up times and slip energies), not only to :data:`HORIZON` after
+        the request, which decides every requirement.
     """
     global _SHARED
     check_options(n, seed, workers)
@@ -187,7 +205,7 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
     rs = ranges if ranges is not None else ranges_mod.load()
     ranges_mod.check(rs, plant)
     ctx = Context(design, plant, rs, profile, replay_args + (f" --sequence {sequence}" if sequence > 1 else ""),
-                  sequence)
+                  sequence, through_lockup)
     workers = workers or os.cpu_count() or 1
     cases = samples(ctx, n, seed, corners)
     # the design's nominal responses, made once here and inherited by the forked workers
@@ -272,6 +290,7 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         "pass_rate_random_samples": _rate(random_rows).get("all", float("nan")),
         "pass_rate_corners": _rate([r for r in results if r["corner"]]).get("all", float("nan")),
         "sequence": ctx.sequence,
+        "horizon_s": None if ctx.through_lockup else HORIZON,
         "pass_rate_first_launch": sum(r["first_all_pass"] for r in results) / total if total else float("nan"),
         "slams": sum(r["slams"] for r in results),
         # failures whose plates first touched after the request: the fill was not complete when torque was asked for
