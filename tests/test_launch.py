@@ -11,6 +11,7 @@ from wetclutch.launch import metrics
 from wetclutch.errors import WetclutchError
 from wetclutch.params import Params
 from wetclutch.params import load as params_load
+from wetclutch.physics import friction, oil
 
 
 @pytest.fixture(scope="module")
@@ -205,3 +206,24 @@ def test_the_plates_touch_no_sooner_than_the_full_input_fill_allows():
         else:
             assert fill > 0.6 and s["contact_s"] > 0.0
             assert s["t95_settled_s"] > s["contact_s"]
+
+
+def test_a_request_beyond_the_clutchs_capacity_shows_the_valve_input_at_its_top():
+    # The axle torque of a sliding clutch is at most eta / i (mu_max A_p (p_supply - p_contact) + drag): the
+    # pressure cannot exceed the supply's. At a reduced supply pressure, a CVT ratio of 1 and a low friction level
+    # that bound is 145 N m: a 200 N m request finds the valve input at the top of its range through the judged
+    # window (half the samples: the dither reaches it on its upper half) and falls short; 100 N m never needs it.
+    p = params_load(overrides={"driveline.ratio": 1.0, "friction.mu_scale": 0.79, "hydraulics.p_supply": 5.0e5})
+    f, h, d = p.friction, p.hydraulics, p.driveline
+    curve = friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_span)
+    mu_max = max(friction.mu(curve, s) for s in np.linspace(0.0, d.omega_p0, 301))
+    drag = f.drag_20C * oil.dynamic_viscosity(85.0) / oil.dynamic_viscosity(20.0) * d.omega_p0
+    bound = d.eta / d.ratio * (mu_max * h.A_p * (h.p_supply - (h.p_prestress + h.k_reset * h.x_contact / h.A_p)) + drag)
+    for t_ref in (200.0, 100.0):
+        s = launch.simulate(p, "launch", launch.Conditions(t_ref=t_ref, oil_temp_C=85.0, t_max=3.0),
+                            nominal=metrics.Response.empty()).summary
+        assert s["T_ss"] <= bound
+        if t_ref > bound:
+            assert s["input_at_max_pct"] > 40.0 and s["steady_state_error_pct"] > 10.0
+        else:
+            assert s["input_at_max_pct"] == 0.0 and s["requirements"]["steady_state_error"]

@@ -146,3 +146,13 @@ def test_creep_is_the_standby_torque_before_the_request():
     assert metrics.requirements(r, r)["standby"]
     y2 = np.where(t < T_REQ, y + 5.0, y)
     assert not metrics.requirements(metrics.response(t, y2, ref, T_REQ, None), r)["standby"]
+
+
+def test_input_at_max_is_the_share_of_the_window_at_the_top_of_the_range():
+    t = _grid()
+    # the input at its top (5 V) from 1.5 s on, and in the fill before the request (outside the window)
+    u = np.where((t >= 1.5) | (t < 0.2), 5.0, 3.0)
+    w = (T_REQ + metrics.STEADY_START, T_REQ + metrics.STEADY_END)  # 1.3 to 2.3 s: at the top for its last 0.8 s
+    assert metrics.input_at_max(t, u, 5.0, w) == pytest.approx(80.0, abs=0.2)
+    assert metrics.input_at_max(t, np.minimum(u, 4.99), 5.0, w) == 0.0
+    assert np.isnan(metrics.input_at_max(t, u, 5.0, (9.0, 9.5)))

@@ -36,6 +36,11 @@ static value ``T_ss``
 ``contact_s``
     From the request to the plates' first contact (the simulation's true clutch torque, which a rig does not
     measure): positive where the fill was not complete when torque was asked for.
+``input_at_max_pct``
+    Share of the steady window's samples (%) with the valve input at the top of its range: the
+    controller asks for all the valve gives, so the clutch is at or beyond its capacity there
+    (supply pressure, friction, CVT ratio and request); a dithered input at the top reaches it in
+    half the samples.
 ``creep_Nm``
     Mean of ``T_r`` over the last :data:`CREEP_WINDOW` before the request: what the clutch
     in standby pushes into a waiting vehicle.
@@ -188,10 +193,18 @@ def first_contact(t: np.ndarray, T_c: np.ndarray, t_req: float) -> float | None:
     return float(t[touched[0]] - t_req) if touched.size else None
 
 
+def input_at_max(t: np.ndarray, u: np.ndarray, u_max: float, window: tuple[float, float]) -> float:
+    """Share (%) of the samples of ``window`` with the input ``u`` at ``u_max``, the top of its range (NaN: an
+    empty window)."""
+    win = (t >= window[0]) & (t <= window[1])
+    return float(np.mean(u[win] >= u_max) * 100.0) if np.any(win) else np.nan
+
+
 def summary(r: Response, nominal: Response, slip_energy: float, t_sync: float | None,
-            contact: float | None = None) -> dict[str, Any]:
+            contact: float | None = None, input_max: float = np.nan) -> dict[str, Any]:
     """The ``summary.json`` figures of a launch; ``contact`` is the time (s) from the request to the plates' first
-    contact (:func:`first_contact`)."""
+    contact (:func:`first_contact`), ``input_max`` the share of the steady window with the input at the top of its
+    range (:func:`input_at_max`)."""
     req = requirements(r, nominal)
     d = asdict(r)
     d.pop("window")
@@ -201,6 +214,7 @@ def summary(r: Response, nominal: Response, slip_energy: float, t_sync: float | 
         "slip_energy_J": slip_energy,
         "t_sync_s": t_sync,
         "contact_s": contact,
+        "input_at_max_pct": None if not np.isfinite(input_max) else input_max,
         "nominal_t95_settled_s": None if not np.isfinite(nominal.t95_settled_s) else nominal.t95_settled_s,
         "nominal_overshoot_pct": None if not np.isfinite(nominal.overshoot_pct) else nominal.overshoot_pct,
         "requirements": req,

@@ -49,7 +49,10 @@ HORIZON = metrics.STEADY_END + 0.5
 LOCKUP_METRICS = ("slip_energy_J", "t_sync_s")
 N_BINS = 4
 METRICS = ("steady_state_error_pct", "t95_s", "t95_settled_s", "overshoot_pct", "ripple_pct", "jerk_max", "creep_Nm", "standby_peak_Nm",
-           "slip_energy_J", "t_sync_s", "contact_s")
+           "slip_energy_J", "t_sync_s", "contact_s", "input_at_max_pct")
+#: a failure with the valve input at the top of its range in at least this share of the steady window (%) is
+#: counted as one at the clutch's capacity
+CAPACITY_SHARE = 10.0
 
 
 @dataclass(frozen=True)
@@ -295,6 +298,9 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         "slams": sum(r["slams"] for r in results),
         # failures whose plates first touched after the request: the fill was not complete when torque was asked for
         "failures_unfilled": sum(1 for r in results if not r["all_pass"] and (r["metrics"].get("contact_s") or 0) > 0),
+        # failures where the controller asked for all the valve gives: the clutch at or beyond its capacity
+        "failures_at_capacity": sum(1 for r in results if not r["all_pass"]
+                                    and (r["metrics"].get("input_at_max_pct") or 0) >= CAPACITY_SHARE),
         "bins": bins(results, ctx.ranges),
         "percentiles": pct,
         "worst": [{k: r[k] for k in ("index", "values", "metrics", "requirements", "replay")} for r in worst],
