@@ -148,11 +148,15 @@ def test_creep_is_the_standby_torque_before_the_request():
     assert not metrics.requirements(metrics.response(t, y2, ref, T_REQ, None), r)["standby"]
 
 
-def test_input_at_max_is_the_share_of_the_window_at_the_top_of_the_range():
+def test_input_at_max_is_the_share_of_the_window_at_the_top_of_the_range_short_of_the_request():
     t = _grid()
+    ref = np.where(t >= T_REQ, 100.0, 0.0)
     # the input at its top (5 V) from 1.5 s on, and in the fill before the request (outside the window)
     u = np.where((t >= 1.5) | (t < 0.2), 5.0, 3.0)
     w = (T_REQ + metrics.STEADY_START, T_REQ + metrics.STEADY_END)  # 1.3 to 2.3 s: at the top for its last 0.8 s
-    assert metrics.input_at_max(t, u, 5.0, w) == pytest.approx(80.0, abs=0.2)
-    assert metrics.input_at_max(t, np.minimum(u, 4.99), 5.0, w) == 0.0
-    assert np.isnan(metrics.input_at_max(t, u, 5.0, (9.0, 9.5)))
+    short = np.full_like(t, 90.0)
+    assert metrics.input_at_max(t, u, 5.0, w, short, ref) == pytest.approx(80.0, abs=0.2)
+    # the torque short of the request only from 2.1 s: at the top and short for the window's last 0.2 s
+    assert metrics.input_at_max(t, u, 5.0, w, np.where(t >= 2.1, 90.0, 110.0), ref) == pytest.approx(20.0, abs=0.2)
+    assert metrics.input_at_max(t, np.minimum(u, 4.99), 5.0, w, short, ref) == 0.0
+    assert np.isnan(metrics.input_at_max(t, u, 5.0, (9.0, 9.5), short, ref))

@@ -343,7 +343,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     summary = metrics.summary(resp, nominal, slip_energy=float(truth["E_clutch"][-1]), t_sync=t_sync,
                               contact=metrics.first_contact(tr.t, truth["T_c"], cond.t_request),
                               input_max=metrics.input_at_max(signals["time"], signals["u"], ctrl[control.U_MAX],
-                                                             resp.window))
+                                                             resp.window, signals["T_r"], signals["t_ref"]))
     summary.update(controller=d.kind, t_ref_Nm=cond.t_ref, profile=str(cond.profile), oil_temp_C=temp)
     t_peak, limit = float(np.max(truth["T_plate"])), p.thermal.T_plate_limit_C
     summary.update(T_plate_peak_C=t_peak, T_plate_limit_C=limit, T_plate_over_limit=bool(t_peak > limit))

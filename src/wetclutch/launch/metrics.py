@@ -37,10 +37,11 @@ static value ``T_ss``
     From the request to the plates' first contact (the simulation's true clutch torque, which a rig does not
     measure): positive where the fill was not complete when torque was asked for.
 ``input_at_max_pct``
-    Share of the steady window's samples (%) with the valve input at the top of its range: the
-    controller asks for all the valve gives, so the clutch is at or beyond its capacity there
-    (supply pressure, friction, CVT ratio and request); a dithered input at the top reaches it in
-    half the samples.
+    Share of the steady window's samples (%) with the valve input at the top of its range while
+    ``T_r`` is short of the request: the controller asks for all the valve gives and the torque
+    still falls short, so the clutch is at or beyond its capacity there (supply pressure, friction,
+    CVT ratio and request); a dithered input at the top reaches it in half the samples. (An input at
+    the top with the torque above the request is a controller wound up, not a capacity.)
 ``creep_Nm``
     Mean of ``T_r`` over the last :data:`CREEP_WINDOW` before the request: what the clutch
     in standby pushes into a waiting vehicle.
@@ -193,18 +194,20 @@ def first_contact(t: np.ndarray, T_c: np.ndarray, t_req: float) -> float | None:
     return float(t[touched[0]] - t_req) if touched.size else None
 
 
-def input_at_max(t: np.ndarray, u: np.ndarray, u_max: float, window: tuple[float, float]) -> float:
-    """Share (%) of the samples of ``window`` with the input ``u`` at ``u_max``, the top of its range (NaN: an
-    empty window)."""
+def input_at_max(t: np.ndarray, u: np.ndarray, u_max: float, window: tuple[float, float], T_r: np.ndarray,
+                 t_ref: np.ndarray) -> float:
+    """Share (%) of the samples of ``window`` with the input ``u`` at ``u_max``, the top of its range, and ``T_r``
+    below the request ``t_ref`` (NaN: an empty window)."""
     win = (t >= window[0]) & (t <= window[1])
-    return float(np.mean(u[win] >= u_max) * 100.0) if np.any(win) else np.nan
+    short = (u[win] >= u_max) & (T_r[win] < t_ref[win])
+    return float(np.mean(short) * 100.0) if np.any(win) else np.nan
 
 
 def summary(r: Response, nominal: Response, slip_energy: float, t_sync: float | None,
             contact: float | None = None, input_max: float = np.nan) -> dict[str, Any]:
     """The ``summary.json`` figures of a launch; ``contact`` is the time (s) from the request to the plates' first
     contact (:func:`first_contact`), ``input_max`` the share of the steady window with the input at the top of its
-    range (:func:`input_at_max`)."""
+    range and the torque short of the request (:func:`input_at_max`)."""
     req = requirements(r, nominal)
     d = asdict(r)
     d.pop("window")

@@ -50,8 +50,8 @@ LOCKUP_METRICS = ("slip_energy_J", "t_sync_s")
 N_BINS = 4
 METRICS = ("steady_state_error_pct", "t95_s", "t95_settled_s", "overshoot_pct", "ripple_pct", "jerk_max", "creep_Nm", "standby_peak_Nm",
            "slip_energy_J", "t_sync_s", "contact_s", "input_at_max_pct")
-#: a failure with the valve input at the top of its range in at least this share of the steady window (%) is
-#: counted as one at the clutch's capacity
+#: a failure with the valve input at the top of its range and the torque short of the request in at least this
+#: share of the steady window (%) is counted as one at the clutch's capacity
 CAPACITY_SHARE = 10.0
 
 

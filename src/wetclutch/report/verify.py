@@ -73,9 +73,10 @@ def verify_table(result: dict[str, Any]) -> str:
         lines += [f"Of the {failed} launches that fail, {result['failures_unfilled']} had the plates touch only "
                   "after the request: the fill was not complete when torque was asked for, and the response time "
                   "counts the rest of it; "
-                  f"{result['failures_at_capacity']} had the valve input at the top of its range in at least "
-                  f"{verify.CAPACITY_SHARE:g} % of the judged window: the controller asked for all the valve gives, "
-                  "the clutch at or beyond its capacity there (supply pressure, friction, CVT ratio, request).", ""]
+                  f"{result['failures_at_capacity']} had the valve input at the top of its range and the torque "
+                  f"short of the request in at least {verify.CAPACITY_SHARE:g} % of the judged window: the "
+                  "controller asked for all the valve gives, the clutch at or beyond its capacity there (supply "
+                  "pressure, friction, CVT ratio, request).", ""]
     lines += ["| metric | p5 | p50 | p95 | p99 | max |", "|---|---|---|---|---|---|"]
     for key, label, _ in _METRICS:
         p = result["percentiles"].get(key) or {}
@@ -95,7 +96,8 @@ def verify_table(result: dict[str, Any]) -> str:
             if (m.get("contact_s") or 0.0) > 0.0:
                 figs += f", plates touched {m['contact_s']:.3f} s after the request"
             if (m.get("input_at_max_pct") or 0.0) >= verify.CAPACITY_SHARE:
-                figs += f", valve input at the top of its range in {m['input_at_max_pct']:.0f} % of the window"
+                figs += (f", valve input at the top of its range, the torque short, in {m['input_at_max_pct']:.0f} % "
+                         "of the window")
         lines.append(f"- #{w['index']}: {figs}; fails: {', '.join(fails) or 'none'}  \n  `{w['replay']}`")
     return "\n".join(lines)
 
