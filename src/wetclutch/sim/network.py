@@ -533,14 +533,14 @@ _STATUS = {
 }
 
 
-def _event_source(network: Network, e: int) -> str:
-    """Which element an event function belongs to (for error messages)."""
+def _event_source(network: Network, e: int, n_events: int) -> str:
+    """Which element event function ``e`` of ``n_events`` belongs to (for error messages); the layout is
+    :func:`wetclutch.sim.workspace.n_events`'s, the valve amplifier's last."""
     nc = len(network.clutches)
     if 0 <= e < 2 * nc:
         return f"clutch {network.clutches[e // 2].name!r}"
     ng = len(network.gears)
-    n_mov = ng if network._moving() else 0
-    if e >= 2 * nc + 2 * ng + n_mov:
+    if network.act is not None and e == n_events - 1:
         return "the valve amplifier (its regulating range)"
     if e >= 2 * nc + 2 * ng:
         return f"gear {network.gears[e - 2 * nc - 2 * ng].name!r} (its ratio limits)"
@@ -553,7 +553,8 @@ def failure(network: Network, ws: wsp.Workspace, status: int) -> SimulationError
     """The error to raise for a run that ended with ``status``."""
     msg = _STATUS.get(status, f"integration failed (status {status})")
     if status == wsp.ERR_ZENO:
-        msg += f" (at t = {ws.fstate[wsp.FS_T]:.6g} s, {_event_source(network, int(ws.istate[wsp.IS_LAST_EVENT]))})"
+        source = _event_source(network, int(ws.istate[wsp.IS_LAST_EVENT]), ws.g_old.shape[0])
+        msg += f" (at t = {ws.fstate[wsp.FS_T]:.6g} s, {source})"
     elif status == wsp.ERR_SINGULAR:
         k = int(ws.istate[wsp.IS_BAD_BODY])
         who = f"body {network.bodies[k].name!r}" if 0 <= k < len(network.bodies) else "a body"
