@@ -40,6 +40,8 @@ def test_export_loads_back_identically(tmp_path):
         ({"driveline.eta": 1.2}, "driveline.eta"),
         ({"driveline.ratio": "fast"}, "driveline.ratio"),
         ({"driveline": 3.0}, "'driveline' is a section"),
+        ({"friction.mu_slip_poly": [float("nan")]}, "friction.mu_slip_poly.0"),
+        ({"friction.mu_slip_poly": [1e-3, float("inf")]}, "friction.mu_slip_poly.1"),
     ],
 )
 def test_bad_values_name_the_field(override, fragment):

@@ -79,7 +79,7 @@ from pathlib import Path
 from typing import Any
 
 import tomli_w
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, ValidationError
 
 from .errors import ParameterError
 
@@ -195,7 +195,7 @@ class Hydraulics(_Section):
 class Friction(_Section):
     """Plate friction: T_max = mu(slip) * mu_scale * F_n * F_n / (F_n + F_knee), mu turned by mu_slope about its mean over 0..mu_slip_span."""
 
-    mu_slip_poly: list[float] = Field(
+    mu_slip_poly: list[FiniteFloat] = Field(
         [-1.7e-6, 2.7e-4, 2.6e-2],
         description="mu vs slip (rad/s) polynomial, highest power first (lumped: faces x radius x coefficient)",
         json_schema_extra={"unit": "m"},
