@@ -227,3 +227,28 @@ def test_a_request_beyond_the_clutchs_capacity_shows_the_valve_input_at_its_top(
             assert s["input_at_max_pct"] > 40.0 and s["steady_state_error_pct"] > 10.0
         else:
             assert s["input_at_max_pct"] == 0.0 and s["requirements"]["steady_state_error"]
+
+
+def test_a_gear_whose_torque_sits_at_zero_does_not_stall_the_launch():
+    """After lock-up the CVT's torque crossed zero with a restart at every controller sample (a dither of 250 Hz)
+    finding it exactly zero: the gear kept its power flow, the flow turned at once, and the events crept on by
+    3e-12 s each (the launch hung). The flow must turn and the launch go on to its end."""
+    identified = params_load(overrides={
+        "driveline.J_p": 0.8999441601008118, "driveline.J_s": 6.50380621392607,
+        "driveline.ratio": 0.5499861623524075, "driveline.k_a": 479.01347784747594, "driveline.d_a": 5.0376854373197,
+        "hydraulics.p_prestress": 34783.36345544135, "hydraulics.x_contact": 0.00219590449143919,
+        "friction.mu_slip_poly": [-2.615771398531033e-06, 0.00041488431785436264, 0.025220433975933567],
+        "rig.oil_temp_C": 57.49940174993313})
+    d = designs.with_settings(designs.design(identified), dither_hz_torque=250.0)
+    p = params_load(base=identified, overrides={
+        "hydraulics.p_prestress": 38214.50866365887, "hydraulics.x_contact": 0.002240391785848048,
+        "friction.mu_scale": 0.7955111487050389, "friction.mu_slope": 1.3672943594567355,
+        "hydraulics.p_supply": 784913.0084128231, "hydraulics.leak_85C": 1.8098513206514376e-12,
+        "valve.d_stem": 51.31999751526842, "driveline.J_1": 0.0054665051596014345,
+        "hydraulics.line_length": 1.2751207430400517, "hydraulics.air_fraction": 0.003269692825323545,
+        "driveline.ratio": 0.4042623860645286, "driveline.eta": 0.9120129925041925,
+        "driveline.k_a": 383.9745222237261, "engage.T_load": 15.099950816107068})
+    cond = launch.Conditions(t_ref=181.34037658874436, oil_temp_C=86.00531934239307, seed=1889134229,
+                             noise_scale=0.5839585692923934)
+    for r in launch.sequence(p, d, cond, 3):
+        assert r.summary["t_sync_s"] is not None

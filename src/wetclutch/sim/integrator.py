@@ -304,13 +304,21 @@ def _emit_grid(t, t_seg, h, y_old, ws, net, ext, dt_out, t_out0, out_t, out_x, o
 
 @jit_inline
 def _grazing(e_ev, stalls, ws, net):
-    """A clutch that slid off from zero slip and at once turned back, twice at one instant: its torque only
-    grazed its capacity. The restart locks it; its grip margin keeps it locked until a real breakaway."""
+    """An event at once after a restart.
+
+    A clutch that slid off from zero slip and at once turned back, twice at one instant: its torque only
+    grazed its capacity. The restart locks it; its grip margin keeps it locked until a real breakaway.
+
+    A gear whose power flow turned at once after a restart that found its torque exactly zero (a zero torque
+    tells no direction, and the restart kept the flow it had): the flow goes the other way from here."""
     nc = net.cl_a.shape[0]
     if stalls >= 2 and e_ev < 2 * nc and e_ev % 2 == 0:
         j = e_ev // 2
         if ws.clm[j] == 1 or ws.clm[j] == -1:
             ws.fstate[fs_grip(nc, net.gr_in.shape[0]) + j] = GRIP
+    k = (e_ev - 2 * nc) // 2
+    if 2 * nc <= e_ev < 2 * nc + 2 * net.gr_in.shape[0] and e_ev % 2 == 0 and abs(ws.grm[k]) == 1:
+        ws.grm[k] = -ws.grm[k]
 
 
 @jit_inline
@@ -381,7 +389,8 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
                    out_t, out_x, out_aux, out_mode)
         if t_ev != np.inf:
             dense(y_old, ws.K, h, (t_ev - t) / h, ws.x, ws.bw)
-            if t_ev - t <= 1e-12 * max(1.0, abs(t)):
+            # no progress beyond a thousand times the locator's resolution: the event came at once
+            if t_ev - t <= 1e-10 * max(1.0, abs(t)):
                 stalls += 1
                 if stalls > 100:
                     return ERR_ZENO
