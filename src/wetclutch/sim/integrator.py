@@ -302,9 +302,15 @@ def _emit_grid(t, t_seg, h, y_old, ws, net, ext, dt_out, t_out0, out_t, out_x, o
         j = ws.istate[IS_N_OUT]
 
 
+#: an event within this share of the time (at least 1 s) after the restart before it came at once; more than
+#: MAX_SOON such events in a row creep on by picoseconds and end the run as Zeno behaviour
+SOON = 1e-10
+MAX_SOON = 10_000
+
+
 @jit_inline
-def _grazing(e_ev, stalls, ws, net):
-    """An event at once after a restart.
+def _grazing(e_ev, soon, ws, net):
+    """An event at once after a restart (the ``soon``-th in a row, :data:`SOON`).
 
     A clutch that slid off from zero slip and at once turned back, twice at one instant: its torque only
     grazed its capacity. The restart locks it; its grip margin keeps it locked until a real breakaway.
@@ -312,7 +318,7 @@ def _grazing(e_ev, stalls, ws, net):
     A gear whose power flow turned at once after a restart that found its torque exactly zero (a zero torque
     tells no direction, and the restart kept the flow it had): the flow goes the other way from here."""
     nc = net.cl_a.shape[0]
-    if stalls >= 2 and e_ev < 2 * nc and e_ev % 2 == 0:
+    if soon >= 2 and e_ev < 2 * nc and e_ev % 2 == 0:
         j = e_ev // 2
         if ws.clm[j] == 1 or ws.clm[j] == -1:
             ws.fstate[fs_grip(nc, net.gr_in.shape[0]) + j] = GRIP
@@ -348,6 +354,7 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
     y_old = ws.y_old
     t = ws.fstate[FS_T]
     stalls = 0
+    soon = 0
     bp_i = np.searchsorted(net.bps, t, side="right")
     pwm = net.act.shape[0] > 0 and net.act[act_.MODE] == act_.PWM
     after_edge = -1  # level of the PWM edge the next accepted step follows (-1: none)
@@ -389,14 +396,18 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
                    out_t, out_x, out_aux, out_mode)
         if t_ev != np.inf:
             dense(y_old, ws.K, h, (t_ev - t) / h, ws.x, ws.bw)
-            # no progress beyond a thousand times the locator's resolution: the event came at once
-            if t_ev - t <= 1e-10 * max(1.0, abs(t)):
-                stalls += 1
-                if stalls > 100:
+            scale = max(1.0, abs(t))
+            if t_ev - t <= SOON * scale:
+                # the event came at once after the restart before it (progress within a thousand times the
+                # locator's resolution); at the locator's resolution itself it stalls
+                soon += 1
+                stalls = stalls + 1 if t_ev - t <= 1e-12 * scale else 0
+                if stalls > 100 or soon > MAX_SOON:
                     return ERR_ZENO
-                _grazing(e_ev, stalls, ws, net)
+                _grazing(e_ev, soon, ws, net)
             else:
                 stalls = 0
+                soon = 0
             t = t_ev
             ws.fstate[FS_T] = t
             ws.istate[IS_EVENTS] += 1
@@ -405,6 +416,7 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
                 return ERR_SINGULAR
             continue
         stalls = 0
+        soon = 0
         copy(ws.x, ws.y_new)
         t = t_new
         ws.fstate[FS_T] = t
