@@ -252,3 +252,19 @@ def test_a_gear_whose_torque_sits_at_zero_does_not_stall_the_launch():
                              noise_scale=0.5839585692923934)
     for r in launch.sequence(p, d, cond, 3):
         assert r.summary["t_sync_s"] is not None
+
+
+@pytest.mark.parametrize("t_ref, hz_setting", [(100.0, "dither_hz_high"), (25.0, "dither_hz_torque")])
+def test_the_torque_dither_is_faster_high_in_the_pressure_range(t_ref, hz_setting):
+    """The torque dither's half period in the steady window: ``dither_hz_high`` once the pressure is
+    ``dither_high_above`` above the kiss point (100 N m at 85 C: 1.3 bar above it), ``dither_hz_torque``
+    below (25 N m: 0.4 bar above it)."""
+    d = designs.cached(Params())
+    res = launch.simulate(Params(), d, launch.Conditions(t_ref=t_ref, oil_temp_C=85.0))
+    sig = res.signals
+    w0, w1 = res.summary["steady_window_s"]
+    u = sig["u"].to_numpy()[(sig["time"] >= w0).to_numpy() & (sig["time"] <= w1).to_numpy()]
+    # the square wave's edges: jumps of about twice its amplitude (the loop's own moves are far smaller)
+    edges = np.flatnonzero(np.abs(np.diff(u)) > d.settings["dither_amp_torque"])
+    half = np.median(np.diff(edges))
+    assert half == round(0.5 / (d.settings[hz_setting] * 1e-3))

@@ -57,7 +57,8 @@ LAUNCH_DEFAULTS = {
     "hold_offset": 0.0, "fill_exit": 0.1e5, "fill_exit_cold": 0.05e5, "hold_rate": 1.0e5, "hold_lead": 0.01e5,
     "req_lead": 0.2e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kd_p": 1.0e-8, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
     "ki_t": 3.9, "tau_ref": 0.03, "tau_theta": 0.05, "theta0": 1.0, "dither_amp": 0.05, "dither_hz": 125.0,
-    "dither_amp_torque": 0.35, "dither_hz_torque": 166.7, "ff_shift_torque": 1.0, "dip": 0.5, "dip_time": 0.015,
+    "dither_amp_torque": 0.35, "dither_hz_torque": 166.7, "dither_hz_high": 250.0, "dither_high_above": 1.0e5,
+    "ff_shift_torque": 1.0, "dip": 0.5, "dip_time": 0.015,
     "creep_limit": 10.0, "trapped_dip": 0.2,
 }
 #: the defaults that came from ``wetclutch tune`` on the default rig (CMA-ES, 40 training plants of the shipped
@@ -106,6 +107,8 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "dither_hz": Setting("Hz", 1.0, 500.0, "dither frequency before the request"),
         "dither_amp_torque": Setting("V", 0.0, 5.0, "dither amplitude once torque is requested"),
         "dither_hz_torque": Setting("Hz", 1.0, 500.0, "dither frequency once torque is requested"),
+        "dither_hz_high": Setting("Hz", 1.0, 500.0, "the same with the pressure dither_high_above above the kiss point"),
+        "dither_high_above": Setting("Pa", *_P, "pressure above the kiss point from which the torque dither is dither_hz_high"),
         "ff_shift_torque": Setting("-", 0.0, 5.0, "share of the valve play taken off the feedforward under dither"),
         "dip": Setting("V", 0.0, 5.0, "input dip after the fill (onto the magnet's rising branch)"),
         "dip_time": Setting("s", 0.0, 1.0, "length of the dip"),
@@ -397,6 +400,7 @@ def record(d: Design, dt: float = 1e-3) -> np.ndarray:
     mu = np.zeros(controller.N_MU)
     if d.kind == "launch":
         s["dither_half"] = round(0.5 / (s["dither_hz"] * dt))
+        s["dither_half_high"] = round(0.5 / (s["dither_hz_high"] * dt))
         s["ff_shift"] = s["ff_shift_torque"] * s["valve_play"]
         mu = np.array([s["mu2"], s["mu1"], s["mu0"]])
     return controller.pack(d.kind, s, mu, d.temps_C, d.pressures_Pa, d.input_V, d.fill_s, dt, INPUT_RANGE["dc"])
