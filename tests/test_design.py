@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import tomllib
+
 import numpy as np
 import pytest
+import tomli_w
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -170,3 +173,20 @@ def test_any_ranges_table_parses_or_gives_one_line(data):
         assert "\n" not in str(e)
     else:
         assert all(r.low <= r.high for r in out)
+
+
+def _without(text: str, name: str) -> str:
+    data = tomllib.loads(text)
+    del data["settings"][name]
+    return tomli_w.dumps(data)
+
+
+def test_a_controller_file_without_a_later_setting_takes_its_default():
+    """A file written before a setting existed: a controller default fills in, saying so; a plant-derived setting
+    absent is an error naming it."""
+    text = files.to_toml(designs.cached(Params(), "launch"))
+    back = files.loads(_without(text, "dither_hz_high"), "c.toml")
+    assert back.settings["dither_hz_high"] == designs.LAUNCH_DEFAULTS["dither_hz_high"]
+    assert back.sources["dither_hz_high"] == "controller default (not in the file)"
+    with pytest.raises(files.ControllerFileError, match=r"c\.toml: settings\.p_kiss: missing"):
+        files.loads(_without(text, "p_kiss"), "c.toml")

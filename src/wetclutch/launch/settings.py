@@ -18,7 +18,10 @@ Layout::
     ...
 
 :func:`to_toml` writes it, :func:`loads`/:func:`load` read and validate it (one line
-naming the offending field; a file of another kind than asked for is refused).
+naming the offending field; a file of another kind than asked for is refused). A setting
+that is not derived from the plant and is absent from the file (one written before the
+setting existed) takes the controller's default, its source saying so; a plant-derived one
+absent is an error.
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ import tomli_w
 
 from ..errors import ParameterError, WetclutchError
 from ..params import flatten, load as load_params
-from .design import KINDS, MAP_TEMPS, SETTINGS, Design
+from .design import BASELINE_DEFAULTS, KINDS, LAUNCH_DEFAULTS, MAP_TEMPS, SETTINGS, Design
 
 
 class ControllerFileError(WetclutchError):
@@ -98,9 +101,13 @@ def loads(text: str, source: str = "controller file", kind: str | None = None) -
     if extra:
         raise _err(f"{source}: settings.{extra[0]}", f"unknown setting of the {k} controller")
     values, sources = {}, {}
+    defaults = LAUNCH_DEFAULTS if k == "launch" else BASELINE_DEFAULTS
     for name, s in spec.items():
         where = f"{source}: settings.{name}"
         entry = given.get(name)
+        if entry is None and name in defaults:
+            # a setting the file's writer did not have yet: the controller's default, said so
+            entry = {"value": defaults[name], "unit": s.unit, "source": "controller default (not in the file)"}
         if entry is None:
             raise _err(where, "missing")
         if not isinstance(entry, dict) or "value" not in entry:
