@@ -65,7 +65,9 @@ LAUNCH_DEFAULTS = {
 #: ranges, seed 0, 6 generations of 8), rounded; ``tau_theta`` from the launch loop's margins
 #: (:mod:`wetclutch.launch.margins`) and a sweep, ``kd_p``, ``tau_ref``, ``hold_offset`` and the torque dither's
 #: frequency and amplitude from sweeps (600 to 800 plants of the shipped ranges, three or four seeds, three launches
-#: each); the rest were set by hand on the default rig
+#: each), ``dither_hz_high`` and ``dither_high_above`` from sweeps over three plants (the default rig and two
+#: changed clutches, 364 plants of the shipped ranges each, three launches); the rest were set by hand on the
+#: default rig
 TUNED = ("kp_p", "ki_p", "ki_t")
 #: the baseline's settings that are not derived from the plant
 BASELINE_DEFAULTS = {"hold_offset": 0.05e5, "dip": 0.5, "dip_time": 0.015, "dither_amp_torque": 0.3,
