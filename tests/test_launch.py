@@ -229,10 +229,10 @@ def test_a_request_beyond_the_clutchs_capacity_shows_the_valve_input_at_its_top(
             assert s["input_at_max_pct"] == 0.0 and s["requirements"]["steady_state_error"]
 
 
-def test_a_gear_whose_torque_sits_at_zero_does_not_stall_the_launch():
-    """After lock-up the CVT's torque crossed zero with a restart at every controller sample (a dither of 250 Hz)
-    finding it exactly zero: the gear kept its power flow, the flow turned at once, and the events crept on by
-    3e-12 s each (the launch hung). The flow must turn and the launch go on to its end."""
+def test_a_valve_stem_sliding_at_zero_speed_does_not_stall_the_launch():
+    """After lock-up, with a dither of 250 Hz, the restart at a controller sample found the sliding valve stem's
+    speed exactly zero, its friction's slide event came 3.4e-12 s later, and again and again (the launch hung:
+    4.5 million events, time creeping by picoseconds). The stem must be held and the launch go on to its end."""
     identified = params_load(overrides={
         "driveline.J_p": 0.8999441601008118, "driveline.J_s": 6.50380621392607,
         "driveline.ratio": 0.5499861623524075, "driveline.k_a": 479.01347784747594, "driveline.d_a": 5.0376854373197,

@@ -310,21 +310,14 @@ MAX_SOON = 10_000
 
 @jit_inline
 def _grazing(e_ev, soon, ws, net):
-    """An event at once after a restart (the ``soon``-th in a row, :data:`SOON`).
-
-    A clutch that slid off from zero slip and at once turned back, twice at one instant: its torque only
-    grazed its capacity. The restart locks it; its grip margin keeps it locked until a real breakaway.
-
-    A gear whose power flow turned at once after a restart that found its torque exactly zero (a zero torque
-    tells no direction, and the restart kept the flow it had): the flow goes the other way from here."""
+    """An event at once after a restart (the ``soon``-th in a row, :data:`SOON`): a clutch that slid off from
+    zero slip and at once turned back, twice: its torque only grazed its capacity. The restart locks it; its
+    grip margin keeps it locked until a real breakaway."""
     nc = net.cl_a.shape[0]
     if soon >= 2 and e_ev < 2 * nc and e_ev % 2 == 0:
         j = e_ev // 2
         if ws.clm[j] == 1 or ws.clm[j] == -1:
             ws.fstate[fs_grip(nc, net.gr_in.shape[0]) + j] = GRIP
-    k = (e_ev - 2 * nc) // 2
-    if 2 * nc <= e_ev < 2 * nc + 2 * net.gr_in.shape[0] and e_ev % 2 == 0 and abs(ws.grm[k]) == 1:
-        ws.grm[k] = -ws.grm[k]
 
 
 @jit_inline
