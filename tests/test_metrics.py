@@ -120,6 +120,32 @@ def test_settled_t95_is_stable_where_the_first_crossing_jumps():
     assert 0.065 <= lo.t95_settled_s <= 0.075
 
 
+def _sag(t, depth):
+    """A first-order response (tau 20 ms) to 100 N m whose torque sags by ``depth`` x 100 N m, a smooth dip
+    0.1 s wide centred 0.8 s after the request, inside the steady window."""
+    return _first_order(t, 100.0, 0.02) - depth * 100.0 * np.exp(-(((t - T_REQ - 0.8) / 0.05) ** 2))
+
+
+def test_settled_t95_does_not_jump_with_a_sag_inside_the_steady_window():
+    t = _grid()
+    ref = np.where(t >= T_REQ, 100.0, 0.0)
+    shallow, deep = (metrics.response(t, _sag(t, d), ref, T_REQ, None) for d in (0.045, 0.06))
+    assert deep.T_ss < shallow.T_ss and 0.95 * deep.T_ss > 100.0 * (1.0 - 0.06)  # the deep sag leaves the band
+    # both: the first-order rise's 95 % (tau ln 20), smoothing lags it a few samples
+    assert [shallow.t95_settled_s, deep.t95_settled_s] == pytest.approx([0.02 * np.log(20.0)] * 2, abs=0.012)
+    # the sag is the steady state's: its ripple grows with its depth
+    assert deep.ripple_pct > shallow.ripple_pct > 0.5
+
+
+def test_settled_t95_of_a_response_still_rising_when_the_steady_window_begins():
+    t = _grid()
+    ref = np.where(t >= T_REQ, 100.0, 0.0)
+    tau = 0.12  # 95 % at tau ln 20 = 0.36 s, after the steady window begins
+    r = metrics.response(t, _first_order(t, 100.0, tau), ref, T_REQ, None)
+    assert r.t95_settled_s == pytest.approx(r.t95_s, abs=0.012) and r.t95_settled_s > metrics.STEADY_START
+    assert not metrics.requirements(r, r)["response_time"]
+
+
 def test_ripple_of_a_sustained_oscillation_fails_robustness():
     t = _grid()
     ref = np.where(t >= T_REQ, 100.0, 0.0)
