@@ -104,3 +104,23 @@ def test_bad_options():
         verify.run(d, n=-1, progress=False)
     with pytest.raises(WetclutchError, match="--workers"):
         verify.run(d, n=1, workers=0, progress=False)
+
+
+def test_the_pass_rate_is_the_random_samples_and_the_corners_stand_beside_it():
+    # 40 random samples of which 30 pass, 8 corners of which 2 pass: mixed, the corners would pull the figure to
+    # 32 / 48; the share of the ranges' clutches that pass is estimated by the random samples alone
+    rs = ranges.load()
+    ctx = verify.Context(designs.cached(Params()), Params(), rs, "step", "", 1, False)
+    figures = {k: 1.0 for k in verify.METRICS}
+    rows = [{"index": i, "corner": i < 8, "values": {r.name: r.low for r in rs}, "metrics": figures, "slams": 0,
+             "requirements": {k: ok for k in metrics.REQUIREMENTS}, "all_pass": ok, "first_all_pass": ok,
+             "replay": ""}
+            for i, ok in enumerate([True] * 2 + [False] * 6 + [True] * 30 + [False] * 10)]
+    res = verify.summarize(rows, ctx, seed=0, n=40)
+    assert res["pass_rate"] == 0.75 and res["pass_rate_first_launch"] == 0.75
+    assert (res["corners_passed"], res["corners"], res["pass_rate_corners"]) == (2, 8, 0.25)
+    assert res["pass_rate_all_cases"] == 32 / 48
+    # Wilson's score interval, z the normal distribution's 97.5 % quantile
+    z, n, p = 1.959963985, 40, 0.75
+    mid, half = (p + z**2 / (2 * n)) / (1 + z**2 / n), z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / (1 + z**2 / n)
+    assert res["pass_rate_interval"] == pytest.approx([mid - half, mid + half], rel=1e-6)

@@ -222,14 +222,14 @@ def _cmd_verify(args: argparse.Namespace) -> None:
     verify_report.write(res, args.out, d)
     seq = (f"; after {args.sequence} launches of each clutch (first launch {100 * res['pass_rate_first_launch']:.1f} %,"
            f" {res['slams']} slams)" if args.sequence > 1 else "")
-    print(f"verify {d.kind}: {res['cases']} clutches, all requirements in {100 * res['pass_rate']:.1f} % "
-          f"({_rates(res)}){seq} -> {args.out}")
+    print(f"verify {d.kind}: all requirements in {verify_report.headline(res)} ({_rates(res)}){seq} -> {args.out}")
 
 
 def _cmd_report(args: argparse.Namespace) -> None:
     from .launch import campaign, ranges, settings, verify
     from .launch import loop as launch
     from .report import main as report
+    from .report import verify as verify_report
 
     verify.check_options(args.samples, args.seed, args.workers)
     verify.check_options(args.baseline_samples, args.seed, args.workers, "--baseline-samples")
@@ -245,9 +245,9 @@ def _cmd_report(args: argparse.Namespace) -> None:
                             sequence=args.sequence, through_lockup=args.through_lockup)
     s = report.write(job, args.out)
     same = s["same_samples"]
-    print(f"report: launch controller meets all requirements in {100 * s['verify']['pass_rate']:.1f} % of "
-          f"{s['verify']['cases']} clutches ({args.sequence} launches each, judged on the last); on the same {same['samples']}: design {100 * same['design']:.1f} %, "
-          f"baseline {100 * same['baseline']:.1f} % -> {args.out}/report.md")
+    print(f"report: launch controller meets all requirements in {verify_report.headline(job.verify)} "
+          f"({args.sequence} launches each, judged on the last); on the same {same['samples']}: design "
+          f"{100 * same['design']:.1f} %, baseline {100 * same['baseline']:.1f} % -> {args.out}/report.md")
 
 
 def _cmd_tune(args: argparse.Namespace) -> None:

@@ -10,7 +10,10 @@ can be replayed with ``wetclutch launch`` (the ``replay`` field).
 
 The result (:func:`run`) holds the pass rate of every requirement, overall and per
 range bin (:data:`N_BINS` equal bins of each range: where it fails, not only how often),
-metric percentiles, the worst cases and every sample.
+metric percentiles, the worst cases and every sample. The pass rate is that of the random
+samples, an estimate of the share of the ranges' clutches that pass (with its 95 %
+confidence interval, Wilson's); the corners are the worst-case figure beside it
+(``corners_passed`` of ``corners``), and ``pass_rate_all_cases`` counts both.
 
 The requirements judge a launch's response up to :data:`wetclutch.launch.metrics.STEADY_END`
 after the request (and its standby before it), so a verification launch stops
@@ -30,6 +33,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+from scipy.stats import binomtest
 
 from ..errors import WetclutchError
 from ..params import Params
@@ -239,6 +243,14 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
     return summarize(results, ctx, seed, n)
 
 
+def _interval(passed: int, n: int) -> list[float] | None:
+    """Wilson's 95 % confidence interval of a pass rate of ``passed`` in ``n`` samples (None: no samples)."""
+    if n == 0:
+        return None
+    ci = binomtest(passed, n).proportion_ci(confidence_level=0.95, method="wilson")
+    return [float(ci.low), float(ci.high)]
+
+
 def _rate(rows: list[dict[str, Any]]) -> dict[str, float]:
     if not rows:
         return {}
@@ -281,6 +293,12 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
 
     worst = sorted(results, key=badness, reverse=True)[:10]
     random_rows = [r for r in results if not r["corner"]]
+    corner_rows = [r for r in results if r["corner"]]
+    # the pass rate estimates the share of the ranges' clutches that pass: the random samples'. The corners, every
+    # combination of the corner ranges' extremes, are no draws of the ranges: mixed in, they would weigh by the
+    # sample count (a sixth of 300 samples, a sixteenth of 1,000); they are the worst-case figure beside it
+    judged = random_rows or results
+    passed = sum(r["all_pass"] for r in judged)
     return {
         "controller": ctx.design.kind,
         "seed": seed,
@@ -288,13 +306,19 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         "cases": total,
         "ranges": [{"name": r.name, "target": r.target, "how": r.how, "dist": r.dist, "low": r.low, "high": r.high,
                     "corner": r.corner, "unit": r.unit} for r in ctx.ranges],
-        "pass_rate": sum(r["all_pass"] for r in results) / total if total else float("nan"),
-        "pass_rate_per_requirement": _rate(results),
+        "pass_rate": passed / len(judged) if judged else float("nan"),
+        "pass_rate_interval": _interval(passed, len(judged)),
+        "pass_rate_per_requirement": _rate(judged),
         "pass_rate_random_samples": _rate(random_rows).get("all", float("nan")),
-        "pass_rate_corners": _rate([r for r in results if r["corner"]]).get("all", float("nan")),
+        "pass_rate_corners": _rate(corner_rows).get("all", float("nan")),
+        "corners_passed": sum(r["all_pass"] for r in corner_rows),
+        "corners": len(corner_rows),
+        "pass_rate_all_cases": _rate(results).get("all", float("nan")),
         "sequence": ctx.sequence,
         "horizon_s": None if ctx.through_lockup else HORIZON,
-        "pass_rate_first_launch": sum(r["first_all_pass"] for r in results) / total if total else float("nan"),
+        "pass_rate_first_launch": sum(r["first_all_pass"] for r in judged) / len(judged) if judged else float("nan"),
+        "pass_rate_first_launch_corners": (sum(r["first_all_pass"] for r in corner_rows) / len(corner_rows)
+                                           if corner_rows else float("nan")),
         "slams": sum(r["slams"] for r in results),
         # failures whose plates first touched after the request: the fill was not complete when torque was asked for
         "failures_unfilled": sum(1 for r in results if not r["all_pass"] and (r["metrics"].get("contact_s") or 0) > 0),

@@ -12,23 +12,25 @@ from ..output import atomic_dir, write_json
 from . import html
 from .design import design_md
 from .plots import plot_launch
-from .verify import _METRICS, REQUIREMENT_LABELS, bins_table, plot_histograms, verify_table
+from .verify import _METRICS, REQUIREMENT_LABELS, bins_table, headline, plot_histograms, verify_table
 
 
 def same_samples(ver: dict[str, Any], base: dict[str, Any]) -> dict[str, float]:
-    """Pass rates of design and baseline on the samples both ran (the baseline's are a prefix of the design's)."""
-    common = {r["index"] for r in base["results"]}
+    """Pass rates of design and baseline on the random samples both ran (the baseline's are a prefix of the
+    design's; the corners where neither ran random samples), as the pass rates of a verification count."""
+    theirs = [r for r in base["results"] if not r["corner"]] or base["results"]
+    common = {r["index"] for r in theirs}
     mine = [r for r in ver["results"] if r["index"] in common]
     n = max(len(mine), 1)
     return {"samples": len(mine), "design": sum(r["all_pass"] for r in mine) / n,
-            "baseline": sum(r["all_pass"] for r in base["results"]) / max(len(base["results"]), 1)}
+            "baseline": sum(r["all_pass"] for r in theirs) / max(len(theirs), 1)}
 
 
 def write(job: MainJob, out: str | Path) -> dict[str, Any]:
     """Write the main job's report into ``out`` (atomically); returns the content of ``summary.json``."""
     launches, ver, base = job.launches, job.verify, job.verify_baseline
-    keys = ("pass_rate", "pass_rate_per_requirement", "pass_rate_random_samples", "pass_rate_corners", "cases",
-            "percentiles")
+    keys = ("pass_rate", "pass_rate_interval", "pass_rate_per_requirement", "pass_rate_random_samples",
+            "pass_rate_corners", "corners_passed", "corners", "pass_rate_all_cases", "cases", "samples", "percentiles")
     with atomic_dir(out) as d:
         for i, (res, base_res) in enumerate(launches):
             plot_launch(res.signals, res.truth, res.summary, d / f"launch_{i}.png", extra=base_res.signals,
@@ -106,12 +108,14 @@ def _report_md(job: MainJob, summary: dict[str, Any]) -> str:
         "",
         "Requirements, on the measured axle torque `T_r`: " + "; ".join(REQUIREMENT_LABELS[k] for k in metrics.REQUIREMENTS)
         + ". The response time judged is the settled one (the last entry into the band above 95 % of the steady "
-        "value); the first crossing of 95 % is reported beside it. Metric definitions: `wetclutch.launch.metrics`.",
+        "value before the steady window begins); the first crossing of 95 % is reported beside it. Metric "
+        "definitions: `wetclutch.launch.metrics`.",
         "",
-        f"**Verdict.** Over {ver['cases']} clutches that vary around this one ({varied}), each launched "
+        f"**Verdict.** Over clutches that vary around this one ({varied}), each launched "
         f"{ver['sequence']} time(s) with the controller's adaptation carried over and judged on the last launch, the launch "
-        f"controller meets every requirement in **{100 * ver['pass_rate']:.1f} %** of cases. On the same "
-        f"{same['samples']} samples it meets them in {100 * same['design']:.1f} %, the baseline (timed fill, "
+        f"controller meets every requirement in **{headline(ver)}** (the corners: every combination of the corner "
+        f"ranges' extremes). On the same {same['samples']} samples it meets them in {100 * same['design']:.1f} %, "
+        "the baseline (timed fill, "
         f"kiss-point hold, PI with anti-windup tuned by the SIMC rule on this plant) in {100 * same['baseline']:.1f} %.",
         "",
         "## Nominal launches",

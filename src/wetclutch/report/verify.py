@@ -43,8 +43,7 @@ def plot_histograms(result: dict[str, Any], path: Path) -> None:
         ax.set_xlabel(label, fontsize=9)
         ax.grid(True, alpha=0.3)
     axes[0].set_ylabel("launches")
-    fig.suptitle(f"verify {result['controller']}: {result['cases']} launches, all requirements met in "
-                 f"{100 * result['pass_rate']:.1f} %", fontsize=10)
+    fig.suptitle(f"verify {result['controller']}: all requirements met in {headline(result)}", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -54,12 +53,26 @@ def _pct(v: float | None) -> str:
     return "-" if v is None or v != v else f"{100 * v:.1f} %"
 
 
+def headline(result: dict[str, Any]) -> str:
+    """One line: the pass rate of the random samples with its 95 % interval, and the corners that pass."""
+    n, k = result["samples"], result.get("corners", 0)
+    ci = result.get("pass_rate_interval")
+    text = f"{100 * result['pass_rate']:.1f} % of {n if n else k} {'random clutches' if n else 'corners'}"
+    if n and ci is not None:
+        text += f" (95 % interval {100 * ci[0]:.1f}-{100 * ci[1]:.1f} %)"
+    if n and k:
+        text += f"; corners {result['corners_passed']} of {k}"
+    return text
+
+
 def verify_table(result: dict[str, Any]) -> str:
     """Markdown: pass rates, metric percentiles, worst cases."""
     rate = result["pass_rate_per_requirement"]
-    lines = [f"**{result['controller']}**: {result['cases']} launches ({result['samples']} random, "
-             f"{result['cases'] - result['samples']} corners), seed {result['seed']}; random samples "
-             f"{_pct(result['pass_rate_random_samples'])}, corners {_pct(result['pass_rate_corners'])}",
+    lines = [f"**{result['controller']}**: {result['cases']} clutches ({result['samples']} random, "
+             f"{result['cases'] - result['samples']} corners), seed {result['seed']}; all requirements met in "
+             f"{headline(result)}. The pass rates below are the random samples' (an estimate of the share of the "
+             "ranges' clutches that pass); the corners, every combination of the corner ranges' extremes, are the "
+             f"worst case beside them ({_pct(result['pass_rate_all_cases'])} of all cases together).",
              "",
              "| requirement | pass rate |", "|---|---|"]
     lines += [f"| {REQUIREMENT_LABELS[k]} | {_pct(rate.get(k))} |" for k in metrics.REQUIREMENTS]
