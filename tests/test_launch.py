@@ -193,19 +193,21 @@ def test_the_plates_touch_no_sooner_than_the_full_input_fill_allows():
     # comes later in any launch. Warm oil fills within 0.1 s, long before the request at 1 s; cold oil through a
     # feed line 1.5 times as long into a volume 1.3 times as large is still stroking at the request, and the
     # response, which cannot start before the contact, counts the rest of the fill.
+    # ``fastest_contact`` is that open-loop run to the plates' contact: before the launch's own, or, in the cold,
+    # none before the request (no controller fills that clutch in time).
     p = Params()
     slow = params_load(overrides={"hydraulics.x_contact": 1.3 * p.hydraulics.x_contact,
                                   "hydraulics.line_length": 1.5 * p.hydraulics.line_length})
-    for plant, temp in ((p, 85.0), (slow, 10.0)):
-        fill = float(designs.fill_times(plant, np.array([temp]))[0])
-        cond = launch.Conditions(t_ref=50.0, oil_temp_C=temp)
-        s = launch.simulate(plant, "launch", cond, nominal=metrics.Response.empty()).summary
-        assert cond.t_request + s["contact_s"] > fill
-        if temp > 50.0:
-            assert s["contact_s"] < 0.0
-        else:
-            assert s["contact_s"] > 0.0  # that fill takes 0.67 s
-            assert s["t95_settled_s"] > s["contact_s"]
+    warm, cold = launch.Conditions(t_ref=50.0, oil_temp_C=85.0), launch.Conditions(t_ref=50.0, oil_temp_C=10.0)
+    fills = [float(designs.fill_times(plant, np.array([c.oil_temp_C]))[0]) for plant, c in ((p, warm), (slow, cold))]
+    w, c = (launch.simulate(plant, "launch", cond, nominal=metrics.Response.empty()).summary
+            for plant, cond in ((p, warm), (slow, cold)))
+    assert warm.t_request + w["contact_s"] > fills[0] and cold.t_request + c["contact_s"] > fills[1]
+    assert w["contact_s"] < 0.0 < c["contact_s"]  # the cold fill takes 0.67 s to 60 % of the stroke
+    assert c["t95_settled_s"] > c["contact_s"]
+    fastest = launch.fastest_contact(p, warm)
+    assert fastest is not None and fastest < w["contact_s"]
+    assert launch.fastest_contact(slow, cold) is None
 
 
 def test_a_request_beyond_the_clutchs_capacity_shows_the_valve_input_at_its_top():

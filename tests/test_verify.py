@@ -114,7 +114,7 @@ def test_the_pass_rate_is_the_random_samples_and_the_corners_stand_beside_it():
     figures = {k: 1.0 for k in verify.METRICS}
     rows = [{"index": i, "corner": i < 8, "values": {r.name: r.low for r in rs}, "metrics": figures, "slams": 0,
              "requirements": {k: ok for k in metrics.REQUIREMENTS}, "all_pass": ok, "first_all_pass": ok,
-             "replay": ""}
+             "fill_too_slow": False, "replay": ""}
             for i, ok in enumerate([True] * 2 + [False] * 6 + [True] * 30 + [False] * 10)]
     res = verify.summarize(rows, ctx, seed=0, n=40)
     assert res["pass_rate"] == 0.75 and res["pass_rate_first_launch"] == 0.75

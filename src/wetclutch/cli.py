@@ -222,7 +222,7 @@ def _cmd_verify(args: argparse.Namespace) -> None:
     verify_report.write(res, args.out, d)
     seq = (f"; after {args.sequence} launches of each clutch (first launch {100 * res['pass_rate_first_launch']:.1f} %,"
            f" {res['slams']} slams)" if args.sequence > 1 else "")
-    print(f"verify {d.kind}: all requirements in {verify_report.headline(res)} ({_rates(res)}){seq} -> {args.out}")
+    print(f"verify {d.kind}: all requirements in {verify_report.headline(res, _rates(res))}{seq} -> {args.out}")
 
 
 def _cmd_report(args: argparse.Namespace) -> None:

@@ -151,9 +151,13 @@ def run_sample(ctx: Context, sample: Sample, grid: tuple[np.ndarray, np.ndarray]
         figures, req, error = {}, {k: False for k in metrics.REQUIREMENTS}, str(e)
     first = seq[0]["all_pass"] if seq else False
     slams = sum(1 for x in seq if x["overshoot_pct"] is not None and x["overshoot_pct"] > 100.0 * (SLAM_FACTOR - 1))
+    # a failure whose plates touched only after the request: would the valve wide open from the start have filled
+    # the clutch in time? (only then is the late fill the controller's)
+    late = not all(req.values()) and (figures.get("contact_s") or 0.0) > 0.0
+    too_slow = late and launch.fastest_contact(plant, cond) is None
     return {"index": sample.index, "corner": sample.corner, "seed": sample.seed, "values": sample.values,
             "metrics": figures, "requirements": req, "all_pass": all(req.values()), "first_all_pass": first,
-            "slams": slams, "error": error, "replay": ctx.replay(sample, plant, cond)}
+            "slams": slams, "fill_too_slow": too_slow, "error": error, "replay": ctx.replay(sample, plant, cond)}
 
 
 _SHARED: tuple[Context, tuple[np.ndarray, np.ndarray]] | None = None
@@ -322,6 +326,9 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         "slams": sum(r["slams"] for r in results),
         # failures whose plates first touched after the request: the fill was not complete when torque was asked for
         "failures_unfilled": sum(1 for r in results if not r["all_pass"] and (r["metrics"].get("contact_s") or 0) > 0),
+        # of those, the ones whose valve wide open from the start would not have filled the clutch before the
+        # request either: no controller fills them in time
+        "failures_fill_too_slow": sum(1 for r in results if r["fill_too_slow"]),
         # failures where the controller asked for all the valve gives: the clutch at or beyond its capacity
         "failures_at_capacity": sum(1 for r in results if not r["all_pass"]
                                     and (r["metrics"].get("input_at_max_pct") or 0) >= CAPACITY_SHARE),

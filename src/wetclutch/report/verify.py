@@ -53,13 +53,15 @@ def _pct(v: float | None) -> str:
     return "-" if v is None or v != v else f"{100 * v:.1f} %"
 
 
-def headline(result: dict[str, Any]) -> str:
-    """One line: the pass rate of the random samples with its 95 % interval, and the corners that pass."""
+def headline(result: dict[str, Any], detail: str = "") -> str:
+    """One line: the pass rate of the random samples with its 95 % interval (and ``detail`` beside it), and the
+    corners that pass."""
     n, k = result["samples"], result.get("corners", 0)
     ci = result.get("pass_rate_interval")
+    inside = [f"95 % interval {100 * ci[0]:.1f}-{100 * ci[1]:.1f} %"] if n and ci is not None else []
+    inside += [detail] if detail else []
     text = f"{100 * result['pass_rate']:.1f} % of {n if n else k} {'random clutches' if n else 'corners'}"
-    if n and ci is not None:
-        text += f" (95 % interval {100 * ci[0]:.1f}-{100 * ci[1]:.1f} %)"
+    text += f" ({'; '.join(inside)})" if inside else ""
     if n and k:
         text += f"; corners {result['corners_passed']} of {k}"
     return text
@@ -85,7 +87,9 @@ def verify_table(result: dict[str, Any]) -> str:
     if failed:
         lines += [f"Of the {failed} launches that fail, {result['failures_unfilled']} had the plates touch only "
                   "after the request: the fill was not complete when torque was asked for, and the response time "
-                  "counts the rest of it; "
+                  f"counts the rest of it ({result['failures_fill_too_slow']} of them would not have been filled in "
+                  "time with the valve wide open from the start either: no controller fills those before the "
+                  "request); "
                   f"{result['failures_at_capacity']} had the valve input at the top of its range and the torque "
                   f"short of the request in at least {verify.CAPACITY_SHARE:g} % of the judged window: the "
                   "controller asked for all the valve gives, the clutch at or beyond its capacity there (supply "
@@ -144,7 +148,7 @@ def write(result: dict[str, Any], out: str | Path, design: Design) -> None:
               + bins_table(result) + "\n\n![histograms](histograms.png)\n")
         (d / "verify.md").write_text(md)
         rows = [{"index": r["index"], "corner": r["corner"], **r["values"], **r["metrics"], **r["requirements"],
-                 "all_pass": r["all_pass"]} for r in result["results"]]
+                 "all_pass": r["all_pass"], "fill_too_slow": r["fill_too_slow"]} for r in result["results"]]
         pd.DataFrame(rows).to_csv(d / "samples.csv", index=False)
         plot_histograms(result, d / "histograms.png")
         html.write_verify(d / "verify.html", md, result, _METRICS)
