@@ -28,6 +28,13 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       pressure towards the supply. The kiss point (contact pressure) comes from
       identification (``wetclutch identify`` estimates it as the pressure at
       torque onset) or the parameter set, and the launch corrects it (below).
+      Before anything is learnt, the fill itself places it: the full input's steep
+      rise (the chamber filling) ends where the piston starts to move, at the
+      reset spring's prestress, and the kiss point lies ``stroke_span`` (the
+      design's ``k_reset x_contact / A_p``) above that. A prestress that differs
+      from the design's moves the whole stroke's pressure, so that the fill, judged
+      from the design's kiss point, would end at once (and leave the stroke to the
+      hold's slow approach) or reach the plates wide open.
     * **Creep watch in the hold.** What the waiting vehicle feels is measured: the
       filtered ``T_r``. Torque above the open plates' drag (the least torque seen
       since the fill, and no less than zero: a negative torque is the axle ringing
@@ -145,10 +152,10 @@ LAUNCH, BASELINE = 0, 1
 (P_KISS, HOLD_OFFSET, FILL_EXIT, A_P, RATIO, ETA, MU2, MU1, MU0, F_KNEE, KP_P, KI_P, KP_T, KI_T, P_MAX, TAU_REF,
  HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, HOLD_LEAD, FILL_EXIT_COLD, FF_T0, FF_DT,
  FF_NT, FF_P0, FF_DP, FF_NP, KI_HOLD, DITHER_AMP_T, DITHER_HALF_T, FF_SHIFT_T, REQ_LEAD, KD_P, CREEP_LIMIT,
- VALVE_PLAY, TRAPPED_DIP, DITHER_HALF_HIGH, DITHER_HIGH_ABOVE) = range(4, 47)
+ VALVE_PLAY, TRAPPED_DIP, DITHER_HALF_HIGH, DITHER_HIGH_ABOVE, STROKE_SPAN) = range(4, 48)
 # baseline: its PI gains (V/N m, V/(N m s)) and the fill time (s) at each feedforward temperature
-KP_B, KI_B = 47, 48
-FILL_T = 49
+KP_B, KI_B = 48, 49
+FILL_T = 50
 N_FILL_T = 5
 FF_TABLE = FILL_T + N_FILL_T  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
 N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power first
@@ -156,8 +163,18 @@ N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power 
 # --- controller state
 (CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED, CS_KISS,
  CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF, CS_THETA_START, CS_THETA_N, CS_THETA_LEARNT, CS_DPF,
- CS_PPREV, CS_TMIN, CS_REF1, CS_ANSWERED, CS_TREQ, CS_KISS_LEARNT, CS_W1PEAK, CS_W1DROP, CS_HIGH) = range(32)
-N_CS = 32
+ CS_PPREV, CS_TMIN, CS_REF1, CS_ANSWERED, CS_TREQ, CS_KISS_LEARNT, CS_W1PEAK, CS_W1DROP, CS_HIGH, CS_STROKE) = range(33)
+N_CS = 33
+#: time constant of the fast pressure filter (s)
+TAU_PF5 = 0.005
+#: the fill's steep rise has ended once the fast-filtered pressure rises slower than this (Pa/s), the stroke's ramp
+#: (a few bar/s in warm oil) and sensor noise below it, the chamber's filling (tens of bar/s) above; not before
+#: PLATEAU_AFTER (s) into the fill, where the rise is only beginning
+PLATEAU_RATE = 5.0e5
+PLATEAU_AFTER = 0.005
+#: a fill whose rise has not ended PLATEAU_LATEST (s) into it (a chamber that fills slowly, or noise) is taken as
+#: stroking, with the kiss point as believed
+PLATEAU_LATEST = 0.1
 #: time constant of the filtered derivative of the measured pressure (s): it passes the valve's own pressure
 #: oscillation (20 to 40 Hz) and smooths the sensor's noise
 TAU_DP = 0.002
@@ -464,6 +481,22 @@ def _find_kiss(ctrl, cs, meas, t_ref, phase, dt):
 
 
 @_inline
+def _stroke_start(ctrl, cs, p, dt):
+    """Where the piston starts to move: the full-input fill's steep rise (the chamber filling) ends at the reset
+    spring's prestress, and the stroke's slow ramp follows. The kiss point lies the design's stroke span
+    (``k_reset x_contact / A_p``) above it: on a launch with nothing learnt that places the plates wherever a
+    stiffer or weaker prestress has moved them (the whole stroke's pressure moves with it, so that the fill's end,
+    judged by pressure from a wrong kiss point, would come at once or too late)."""
+    late = cs[CS_N] * dt > PLATEAU_LATEST
+    if not late and (cs[CS_N] * dt < PLATEAU_AFTER or cs[CS_PF5] < ARM_P or (p - cs[CS_PF5]) / TAU_PF5 > PLATEAU_RATE):
+        return
+    cs[CS_STROKE] = 1.0
+    if not late and cs[CS_KISS_LEARNT] == 0.0 and ctrl[STROKE_SPAN] > 0.0:
+        est = cs[CS_PF5] + ctrl[STROKE_SPAN]
+        cs[CS_KISS] = min(max(est, ctrl[P_KISS] - SEARCH_SPAN), ctrl[P_KISS] + SEARCH_SPAN)
+
+
+@_inline
 def _watch_creep(ctrl, cs, meas, dt):
     """The kiss point that a calm hold pressure and the torque above the open plates' drag (the least torque seen
     since the fill) explain: a belief too high (found in a pressure slam, or learnt on a warmer clutch) shows as
@@ -490,7 +523,7 @@ def _launch(ctrl, cs, meas, t_ref):
     cs[CS_N] += 1.0
     cs[CS_PF] = p if first else cs[CS_PF] + (p - cs[CS_PF]) * dt / (0.02 + dt)
     cs[CS_TF] = meas[M_TR] if first else cs[CS_TF] + (meas[M_TR] - cs[CS_TF]) * dt / (0.02 + dt)
-    cs[CS_PF5] = p if first else cs[CS_PF5] + (p - cs[CS_PF5]) * dt / (0.005 + dt)
+    cs[CS_PF5] = p if first else cs[CS_PF5] + (p - cs[CS_PF5]) * dt / (TAU_PF5 + dt)
     rate = 0.0 if first else (p - cs[CS_PPREV]) / dt
     cs[CS_DPF] += (rate - cs[CS_DPF]) * dt / (TAU_DP + dt)
     cs[CS_PPREV] = p
@@ -500,9 +533,12 @@ def _launch(ctrl, cs, meas, t_ref):
     _find_kiss(ctrl, cs, meas, t_ref, phase, dt)
     if phase == HOLD and t_ref <= 0.0 and cs[CS_DIP] <= 0.0 and cs[CS_FOUND] != 0.0:
         _watch_creep(ctrl, cs, meas, dt)
+    if phase == FILL and cs[CS_STROKE] == 0.0:
+        _stroke_start(ctrl, cs, p, dt)
     p_hold = cs[CS_KISS] + ctrl[HOLD_OFFSET]
     if phase == FILL:
-        if p < cs[CS_KISS] - _fill_exit(ctrl, temp):
+        # (the piston has not started to move before the chamber's steep rise has ended)
+        if cs[CS_STROKE] == 0.0 or p < cs[CS_KISS] - _fill_exit(ctrl, temp):
             cs[CS_U] = ctrl[U_MAX]
             return ctrl[U_MAX]
         # the piston has stroked most of the way: approach the kiss point gently, since
@@ -661,7 +697,8 @@ def pack(kind: str, s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pres
              HOLD_LEAD: "hold_lead", FILL_EXIT_COLD: "fill_exit_cold", KI_HOLD: "ki_hold",
              DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque", FF_SHIFT_T: "ff_shift",
              REQ_LEAD: "req_lead", KD_P: "kd_p", CREEP_LIMIT: "creep_limit", VALVE_PLAY: "valve_play",
-             TRAPPED_DIP: "trapped_dip", DITHER_HALF_HIGH: "dither_half_high", DITHER_HIGH_ABOVE: "dither_high_above"}
+             TRAPPED_DIP: "trapped_dip", DITHER_HALF_HIGH: "dither_half_high", DITHER_HIGH_ABOVE: "dither_high_above",
+             STROKE_SPAN: "stroke_span"}
     baseline = {P_KISS: "p_kiss", HOLD_OFFSET: "hold_offset", DIP: "dip", DIP_N: "dip_n", KP_B: "kp", KI_B: "ki",
                 DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque"}
     for slot, name in (launch if kind == "launch" else baseline).items():

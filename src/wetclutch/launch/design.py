@@ -73,7 +73,8 @@ TUNED = ("kp_p", "ki_p", "ki_t")
 BASELINE_DEFAULTS = {"hold_offset": 0.05e5, "dip": 0.5, "dip_time": 0.015, "dither_amp_torque": 0.3,
                      "dither_hz_torque": 125.0}
 
-_PLANT = {
+#: the settings a design takes from the plant (:func:`plant_settings`)
+PLANT_SETTINGS = {
     "p_kiss": Setting("Pa", *_P, "kiss point: the contact pressure of the plates"),
     "a_p": Setting("m^2", 1e-6, 1.0, "piston area"),
     "ratio": Setting("-", 0.05, 20.0, "CVT speed ratio w_r / w_1"),
@@ -84,11 +85,12 @@ _PLANT = {
     "mu1": Setting("m s/rad", -1.0, 1.0, "friction law mu(slip): linear coefficient"),
     "mu0": Setting("m", 1e-6, 10.0, "friction law mu(slip): constant"),
     "valve_play": Setting("V", 0.0, 5.0, "the magnet's hysteresis play as input voltage, I_hyst / g_current"),
+    "stroke_span": Setting("Pa", 0.0, 5e6, "pressure rise over the piston's stroke, from the prestress to the kiss point"),
 }
 #: every setting of each controller kind
 SETTINGS: dict[str, dict[str, Setting]] = {
     "launch": {
-        **_PLANT,
+        **PLANT_SETTINGS,
         "hold_offset": Setting("Pa", *_P, "hold this far above the kiss point while waiting"),
         "fill_exit": Setting("Pa", *_P, "end the full-input fill this far below the kiss point, oil at 85 C"),
         "fill_exit_cold": Setting("Pa", *_P, "the same with oil at 20 C (linear in between)"),
@@ -118,7 +120,7 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "trapped_dip": Setting("V", 0.0, 5.0, "input taken off beyond the magnet's play while the hold's pressure is trapped high"),
     },
     "baseline": {
-        "p_kiss": _PLANT["p_kiss"],
+        "p_kiss": PLANT_SETTINGS["p_kiss"],
         "hold_offset": Setting("Pa", *_P, "hold this far above the kiss point (open loop, through the static map)"),
         "dip": Setting("V", 0.0, 5.0, "input dip after the fill pulse"),
         "dip_time": Setting("s", 0.0, 1.0, "length of the dip"),
@@ -317,21 +319,9 @@ def _origin(origin: dict[str, str], *paths: str) -> str:
     return " / ".join(kinds)
 
 
-def design(plant: Params, kind: str = "launch", origin: dict[str, str] | None = None) -> Design:
-    """Design controller ``kind`` for ``plant``.
-
-    Parameters
-    ----------
-    plant
-        The parameter set to design on.
-    kind
-        ``launch`` (the design) or ``baseline`` (the fair comparison).
-    origin
-        Dotted parameter path -> how its value was obtained (``identified``,
-        ``parameter file``, ``--set``; missing: ``default``), for the settings' sources.
-    """
-    if kind not in KINDS:
-        raise WetclutchError(f"unknown controller '{kind}' (choose from {', '.join(KINDS)})")
+def plant_settings(plant: Params, origin: dict[str, str] | None = None) -> dict[str, tuple[float, str]]:
+    """The settings a design takes from the plant: name -> (value, where it came from); ``origin`` as in
+    :func:`design`."""
     origin = origin or {}
     f, h, d, v = plant.friction, plant.hydraulics, plant.driveline, plant.valve
     poly = np.trim_zeros(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_span), "f")
@@ -353,11 +343,34 @@ def design(plant: Params, kind: str = "launch", origin: dict[str, str] | None = 
                   " min(p_supply, p_relief)"),
         "valve_play": (v.I_hyst / v.g_current, f"plant ({_origin(origin, 'valve.I_hyst', 'valve.g_current')}): "
                        "I_hyst / g_current"),
+        "stroke_span": (h.k_reset * h.x_contact / h.A_p,
+                        f"plant ({_origin(origin, 'hydraulics.k_reset', 'hydraulics.x_contact', 'hydraulics.A_p')}): "
+                        "k_reset x_contact / A_p"),
     }
     mu_src = (f"plant ({_origin(origin, 'friction.mu_slip_poly', 'friction.mu_scale', 'friction.mu_slope')}): "
               "mu_slip_poly x mu_scale, turned by mu_slope")
     for name, value in zip(("mu2", "mu1", "mu0"), mu):
         plant_values[name] = (float(value), mu_src)
+    return plant_values
+
+
+def design(plant: Params, kind: str = "launch", origin: dict[str, str] | None = None) -> Design:
+    """Design controller ``kind`` for ``plant``.
+
+    Parameters
+    ----------
+    plant
+        The parameter set to design on.
+    kind
+        ``launch`` (the design) or ``baseline`` (the fair comparison).
+    origin
+        Dotted parameter path -> how its value was obtained (``identified``,
+        ``parameter file``, ``--set``; missing: ``default``), for the settings' sources.
+    """
+    if kind not in KINDS:
+        raise WetclutchError(f"unknown controller '{kind}' (choose from {', '.join(KINDS)})")
+    origin = origin or {}
+    plant_values = plant_settings(plant, origin)
     table = feedforward(plant)
     map_src = f"plant ({_origin(origin, 'valve.V_supply', 'hydraulics.p_supply')}): inverse static map"
     if kind == "launch":

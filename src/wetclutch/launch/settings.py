@@ -36,7 +36,8 @@ import tomli_w
 
 from ..errors import ParameterError, WetclutchError
 from ..params import flatten, load as load_params
-from .design import BASELINE_DEFAULTS, KINDS, LAUNCH_DEFAULTS, MAP_TEMPS, SETTINGS, Design
+from .design import (BASELINE_DEFAULTS, KINDS, LAUNCH_DEFAULTS, MAP_TEMPS, PLANT_SETTINGS, SETTINGS, Design,
+                     plant_settings)
 
 
 class ControllerFileError(WetclutchError):
@@ -100,14 +101,23 @@ def loads(text: str, source: str = "controller file", kind: str | None = None) -
     extra = sorted(set(given) - set(spec))
     if extra:
         raise _err(f"{source}: settings.{extra[0]}", f"unknown setting of the {k} controller")
+    try:
+        plant = load_params(None, flatten(data["plant"]))
+    except ParameterError as e:
+        raise _err(f"{source}: [plant]", str(e)) from None
     values, sources = {}, {}
     defaults = LAUNCH_DEFAULTS if k == "launch" else BASELINE_DEFAULTS
+    derived: dict[str, tuple[float, str]] | None = None
     for name, s in spec.items():
         where = f"{source}: settings.{name}"
         entry = given.get(name)
         if entry is None and name in defaults:
             # a setting the file's writer did not have yet: the controller's default, said so
             entry = {"value": defaults[name], "unit": s.unit, "source": "controller default (not in the file)"}
+        elif entry is None and name in PLANT_SETTINGS:
+            # or one it takes from the plant: from the file's [plant], said so
+            derived = derived or plant_settings(plant)
+            entry = {"value": derived[name][0], "unit": s.unit, "source": derived[name][1] + " (not in the file)"}
         if entry is None:
             raise _err(where, "missing")
         if not isinstance(entry, dict) or "value" not in entry:
@@ -139,10 +149,6 @@ def loads(text: str, source: str = "controller file", kind: str | None = None) -
                    f"got {table.shape[0]} x {table.shape[1]}")
     if fill.shape != temps.shape or np.any(fill < 0):
         raise _err(f"{source}: tables.fill_s", f"must be {temps.size} non-negative times, one per temperature")
-    try:
-        plant = load_params(None, flatten(data["plant"]))
-    except ParameterError as e:
-        raise _err(f"{source}: [plant]", str(e)) from None
     for key, name in (("source", "input_V"), ("fill_source", "fill_s")):
         if tables.get(key):
             sources[name] = str(tables[key])
