@@ -47,7 +47,7 @@ def test_a_design_runs_on_another_plant():
 
 
 def test_a_launch_stopped_past_the_judged_window_has_the_whole_launchs_verdicts():
-    # a verification launch stops HORIZON after the request (2.8 s); the same plants run to lock-up (which comes
+    # a verification launch stops HORIZON after the request (2.45 s); the same plants run to lock-up (which comes
     # later at 60-85 C and 60-120 N m: 3.2 s and after for these two) give the same figures on everything the
     # requirements judge, and the same adaptation for the next launch of a sequence (judged on the last of two;
     # the first's verdict kept)

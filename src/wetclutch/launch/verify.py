@@ -46,9 +46,10 @@ from .design import Design
 NOMINAL_LEVELS = np.array([25.0, 50.0, 100.0, 150.0, 200.0])
 #: a launch whose torque peaks above this multiple of the steady value slams
 SLAM_FACTOR = 1.5
-#: how long after the request a verification launch runs (s), unless it is run through lock-up: the end of the
-#: requirements' steady window and half a second beyond
-HORIZON = metrics.STEADY_END + 0.5
+#: how long after the request a verification launch runs (s), unless it is run through lock-up: past the end of the
+#: requirements' steady window by the 0.1 s it keeps from a lock-up (a lock-up before then cuts the window short, so
+#: the launch must have seen it) and 0.05 s more
+HORIZON = metrics.STEADY_END + 0.15
 #: figures that need the launch run to lock-up
 LOCKUP_METRICS = ("slip_energy_J", "t_sync_s")
 N_BINS = 4
