@@ -95,6 +95,9 @@ def test_bins_partition_the_random_samples(small_run):
     for name, table in res["bins"].items():
         assert sum(b["samples"] for b in table) == res["samples"]
         assert table[0]["low"] == SMALL[name]["low"] and table[-1]["high"] == SMALL[name]["high"]
+        # one launch per clutch: the launch judged is the first
+        assert [t["pass_rate_first_launch"] for t in table if t["samples"]] == \
+            [t["pass_rate"]["all"] for t in table if t["samples"]]
     assert set(res["pass_rate_per_requirement"]) == set(metrics.REQUIREMENTS) | {"all"}
 
 

@@ -265,7 +265,7 @@ def _rate(rows: list[dict[str, Any]]) -> dict[str, float]:
 
 def bins(results: list[dict[str, Any]], rs: list[ranges_mod.Range], n_bins: int = N_BINS) -> dict[str, list[dict]]:
     """Pass rates per range bin: for each range, :data:`N_BINS` equal bins of ``[low, high]`` over the random
-    samples (corners excluded: they sit on the edges)."""
+    samples (corners excluded: they sit on the edges), of the launch judged and of the first of a sequence."""
     rows = [r for r in results if not r["corner"]]
     out = {}
     for rg in rs:
@@ -274,7 +274,9 @@ def bins(results: list[dict[str, Any]], rs: list[ranges_mod.Range], n_bins: int 
         for i in range(n_bins):
             lo, hi = edges[i], edges[i + 1]
             inside = [r for r in rows if lo <= r["values"][rg.name] < hi or (i == n_bins - 1 and r["values"][rg.name] == hi)]
-            table.append({"low": float(lo), "high": float(hi), "samples": len(inside), "pass_rate": _rate(inside)})
+            first = sum(r["first_all_pass"] for r in inside) / len(inside) if inside else float("nan")
+            table.append({"low": float(lo), "high": float(hi), "samples": len(inside), "pass_rate": _rate(inside),
+                          "pass_rate_first_launch": first})
         out[rg.name] = table
     return out
 

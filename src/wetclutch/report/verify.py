@@ -120,21 +120,26 @@ def verify_table(result: dict[str, Any]) -> str:
 
 
 def bins_table(result: dict[str, Any]) -> str:
-    """Markdown: the pass rate of all requirements in each bin of each range (random samples), and what fails most
-    in the worst bin."""
-    lines = ["| range | varies | " + " | ".join(f"bin {i + 1}" for i in range(4)) + " | fails most in the worst bin |",
+    """Markdown: the pass rate of all requirements in each bin of each range (random samples; with a sequence, of
+    the last launch and of the first, the one right after a change, apart), and what fails most in the worst
+    bin."""
+    seq = result.get("sequence", 1) > 1
+    lines = [f"Each cell: the bin, the pass rate {'of the last launch / of the first launch ' if seq else ''}and the "
+             "samples in it.", "",
+             "| range | varies | " + " | ".join(f"bin {i + 1}" for i in range(4)) + " | fails most in the worst bin |",
              "|---|---|" + "---|" * 4 + "---|"]
     for rg in result["ranges"]:
         table = result["bins"][rg["name"]]
         how = {"abs": "", "rel": " x", "offset": " +"}[rg["how"]]
         unit = f" {rg['unit']}" if rg["unit"] else ""
-        cells = [f"{t['low']:.4g}..{t['high']:.4g}: {_pct(t['pass_rate'].get('all'))} ({t['samples']})" for t in table]
+        cells = [f"{t['low']:.4g}..{t['high']:.4g}: {_pct(t['pass_rate'].get('all'))}"
+                 + (f" / {_pct(t['pass_rate_first_launch'])}" if seq else "") + f" ({t['samples']})" for t in table]
         worst = min((t for t in table if t["samples"]), key=lambda t: t["pass_rate"]["all"], default=None)
         fails = ""
-        if worst is not None:
+        if worst is not None and worst["pass_rate"]["all"] < 1.0:
             k = min(metrics.REQUIREMENTS, key=lambda r: worst["pass_rate"][r])
             fails = f"{k} ({_pct(worst['pass_rate'][k])} pass)"
-        lines.append(f"| {rg['name']} | {rg['target']}{how}{unit} | " + " | ".join(cells) + f" | {fails} |")
+        lines.append(f"| {rg['name']} | {rg['target']}{how}{unit} | " + " | ".join(cells) + f" | {fails or 'none'} |")
     return "\n".join(lines)
 
 
