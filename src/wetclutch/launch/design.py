@@ -55,7 +55,7 @@ _P = (0.0, 5e6)
 #: the launch controller's settings that every plant shares, with their values
 LAUNCH_DEFAULTS = {
     "hold_offset": 0.0, "fill_exit": 0.1e5, "fill_exit_cold": 0.05e5, "hold_rate": 1.0e5, "hold_lead": 0.01e5,
-    "req_lead": 0.2e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kd_p": 1.0e-8, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
+    "req_lead": 0.3e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kd_p": 1.0e-8, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
     "ki_t": 3.9, "tau_ref": 0.03, "tau_theta": 0.05, "theta0": 1.0, "dither_amp": 0.05, "dither_hz": 125.0,
     "dither_amp_torque": 0.35, "dither_hz_torque": 166.7, "dither_hz_high": 250.0, "dither_high_above": 1.0e5,
     "ff_shift_torque": 1.0, "dip": 0.5, "dip_time": 0.015,
@@ -65,9 +65,9 @@ LAUNCH_DEFAULTS = {
 #: ranges, seed 0, 6 generations of 8), rounded; ``tau_theta`` from the launch loop's margins
 #: (:mod:`wetclutch.launch.margins`) and a sweep, ``kd_p``, ``tau_ref``, ``hold_offset`` and the torque dither's
 #: frequency and amplitude from sweeps (600 to 800 plants of the shipped ranges, three or four seeds, three launches
-#: each), ``dither_hz_high`` and ``dither_high_above`` from sweeps over three plants (the default rig and two
-#: changed clutches, 364 plants of the shipped ranges each, three launches); the rest were set by hand on the
-#: default rig
+#: each), ``dither_hz_high``, ``dither_high_above`` and ``req_lead`` from sweeps over three plants (the default rig
+#: and two changed clutches, 364 plants of the shipped ranges each, three launches); the rest were set by hand on
+#: the default rig
 TUNED = ("kp_p", "ki_p", "ki_t")
 #: the baseline's settings that are not derived from the plant
 BASELINE_DEFAULTS = {"hold_offset": 0.05e5, "dip": 0.5, "dip_time": 0.015, "dither_amp_torque": 0.3,
