@@ -34,7 +34,6 @@ from ..params import Params, flatten
 from ..physics import actuator, friction
 from ..plant import clutch
 from ..rig.experiments import INPUT_RANGE
-from ..sim.network import integrate
 from ..sim.signals import Table
 from . import controller
 
@@ -226,8 +225,7 @@ def fill_times(params: Params, temps: np.ndarray = MAP_TEMPS, t_end: float = 3.0
     p_fill = h.p_prestress + FILL_STROKE * (actuator.contact_pressure(params) - h.p_prestress)
     out = np.zeros(temps.size)
     for i, temp in enumerate(temps):
-        rn = clutch.build(params, INPUT_RANGE["dc"][1], temp_C=float(temp))
-        tr = integrate(rn.network, t_end, dt_out=1e-3)
+        rn, tr = clutch.run(params, INPUT_RANGE["dc"][1], t_end, temp_C=float(temp))
         p = tr.x[:, rn.i_pressure]
         hit = np.flatnonzero(p >= p_fill)
         if hit.size == 0:
@@ -283,8 +281,7 @@ def torque_step(params: Params, table: np.ndarray, fill: np.ndarray, hold_offset
     lo, hi = INPUT_RANGE["dc"]
     tt = [0.0, t_fill, t_fill + eps, t_fill + dip_time, t_fill + dip_time + eps, t_step, t_step + eps, t_end]
     vv = [hi, hi, max(u_hold - dip, lo), max(u_hold - dip, lo), u_hold, u_hold, u_step, u_step]
-    rn = clutch.build(params, Table(np.array(tt), np.array(vv), kinks_are_breakpoints=True), temp_C=temp_C)
-    tr = integrate(rn.network, t_end, dt_out=1e-3)
+    _, tr = clutch.run(params, Table(np.array(tt), np.array(vv), kinks_are_breakpoints=True), t_end, temp_C=temp_C)
     rise, tau, theta = step_fit(tr.t, tr.spring_torque("axle"), t_step)
     return rise / (u_step - u_hold), tau, theta
 

@@ -33,7 +33,7 @@ from ..plant import clutch
 from ..rig.sensors import filter_sample, reading, sensor_table
 from ..sim import coldstart
 from ..sim.integrator import advance
-from ..sim.network import Trajectory, failure, integrate, outputs
+from ..sim.network import Trajectory, failure, outputs
 from ..sim.rhs import ratio, spring_torque
 from ..sim.signals import External
 from ..sim.workspace import IS_REJECTED, IS_SETTLE, IS_STEPS, LOCKED, OK, new_workspace
@@ -383,8 +383,8 @@ def fastest_contact(params: Params, conditions: Conditions) -> float | None:
     request, so that no controller fills this clutch before torque is asked for."""
     cond = conditions.checked()
     temp = params.rig.oil_temp_C if cond.oil_temp_C is None else float(cond.oil_temp_C)
-    rn = clutch.build(params, design_.INPUT_RANGE["dc"][1], pwm=False, config="clutch", temp_C=temp)
-    tr = integrate(rn.network, cond.t_request, dt_out=cond.dt, rtol=cond.rtol, atol=rn.atol(ATOL))
+    _, tr = clutch.run(params, design_.INPUT_RANGE["dc"][1], cond.t_request, temp_C=temp, dt_out=cond.dt,
+                       rtol=cond.rtol, atol=ATOL)
     contact = metrics.first_contact(tr.t, tr.clutch_torque("clutch"), cond.t_request)
     return contact if contact is not None and contact <= 0.0 else None
 

@@ -29,7 +29,7 @@ from ..params import Params
 from ..physics import actuator as A
 from ..physics import friction, oil
 from ..physics.actuator import CONFIGS
-from ..sim.network import GROUND, Network, integrate
+from ..sim.network import GROUND, Network, Trajectory, integrate
 from ..sim.signals import Const, Signal
 from . import driveline
 
@@ -98,6 +98,18 @@ def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str =
     return RigNetwork(net, config, temp)
 
 
+def run(params: Params, u: Signal | float, t_end: float, *, pwm: bool = False, config: str = "clutch",
+        temp_C: float | None = None, dt_out: float = 1e-3, rtol: float = 1e-8,
+        atol: float | None = None) -> tuple[RigNetwork, Trajectory]:
+    """The rig network driven by ``u`` (:func:`build`) integrated from rest to ``t_end``.
+
+    ``atol``: the absolute tolerance of every state but the valve stem's speed (:meth:`RigNetwork.atol`);
+    None: the engine's default for every state."""
+    rn = build(params, u, pwm=pwm, config=config, temp_C=temp_C)
+    tol = {} if atol is None else {"atol": rn.atol(atol)}
+    return rn, integrate(rn.network, t_end, dt_out=dt_out, rtol=rtol, **tol)
+
+
 def static_pressure(params: Params, u: Signal | float, *, pwm: bool = False, config: str = "clutch",
                     temp_C: float | None = None, t_end: float = 3.0, window: float = 1.0,
                     dt_out: float = 1e-3) -> float:
@@ -106,6 +118,5 @@ def static_pressure(params: Params, u: Signal | float, *, pwm: bool = False, con
     Averaged rather than sampled, because a DC-driven valve hunts a little by stem
     stick-slip and a PWM-driven one ripples.
     """
-    rn = build(params, u, pwm=pwm, config=config, temp_C=temp_C)
-    tr = integrate(rn.network, t_end, dt_out=dt_out)
+    rn, tr = run(params, u, t_end, pwm=pwm, config=config, temp_C=temp_C, dt_out=dt_out)
     return float(np.mean(tr.x[tr.t >= t_end - window, rn.i_pressure]))

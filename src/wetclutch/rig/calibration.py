@@ -25,7 +25,6 @@ import numpy as np
 from ..params import Params
 from ..plant import clutch, driveline
 from ..plant.scenarios import simulate
-from ..sim.network import integrate
 from ..sim.signals import Step
 from . import experiments
 from .onset import TORQUE_ONSET, first_crossing
@@ -52,8 +51,7 @@ class Figure:
 
 def onset(p: Params, duty: float, temp: float, t_end: float = 3.0) -> tuple[float, float]:
     """(dead time s, pressure Pa at onset) for a PWM step from 0 to ``duty`` at ``T_STEP``."""
-    rn = clutch.build(p, Step(1.0, 0.0, duty), pwm=True, temp_C=temp)
-    tr = integrate(rn.network, t_end, dt_out=1e-4)
+    rn, tr = clutch.run(p, Step(1.0, 0.0, duty), t_end, pwm=True, temp_C=temp, dt_out=1e-4)
     crossing = first_crossing(tr.t, np.abs(tr.clutch_torque("clutch")), TORQUE_ONSET)
     if crossing is None:
         return np.nan, np.nan
@@ -67,8 +65,7 @@ def staircase(p: Params, duties: np.ndarray, temp: float = 85.0, dwell: float = 
     """Valve-only static pressure (Pa) at each duty, going up then down (hysteresis)."""
     levels = np.concatenate([duties, duties[::-1]])
     u, t = experiments.staircase(levels, 0.0, dwell)
-    rn = clutch.build(p, u, pwm=True, config="valve-only", temp_C=temp)
-    tr = integrate(rn.network, float(t[-1] + dwell), dt_out=1e-3)
+    rn, tr = clutch.run(p, u, float(t[-1] + dwell), pwm=True, config="valve-only", temp_C=temp)
     pk = np.array([np.mean(tr.x[(tr.t > tk + dwell - 0.5) & (tr.t < tk + dwell), rn.i_pressure]) for tk in t])
     return pk[: duties.size], pk[duties.size :][::-1]
 
