@@ -10,7 +10,7 @@ bookkeeping the engine carries (the target's baseline), without it (a lighter mo
 with LSODA (automatic Adams/BDF switching) for comparison. Then the speed ratios, the
 agreement of the two (pressure samples, torque onset, energy terms and balance) and each
 one's pressure error against a tight reference on which both agree.
-Targets (issue 3): engine < 20 ms and >= 100x faster than the stiff baseline.
+Targets: engine < 20 ms and >= 100x faster than the stiff baseline.
 """
 
 from __future__ import annotations

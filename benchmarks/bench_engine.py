@@ -9,7 +9,7 @@ Prints the wall time per run (median of repeats, after JIT warm-up) of
 
 the speed ratios and the agreement of ``t_sync``. Output costs the engine one
 right-hand-side evaluation per row, so the like-for-like ratio compares equal output
-density; the 1 ms figure is what ``wetclutch simulate`` writes. Targets (issue 2): engage < 5 ms and
+density; the 1 ms figure is what ``wetclutch simulate`` writes. Targets: engage < 5 ms and
 >= 100x faster than the baseline; coupled-clutches < 5 ms.
 
 Usage: ``python benchmarks/bench_engine.py [--repeats N]``

@@ -6,7 +6,7 @@ again with fresh sensor noise as often as it takes to fill one hour of recording
 (as many files as a test campaign would give), and times
 :func:`wetclutch.ident.identify` on them (median of repeats after a warm-up).
 Reading files is timed separately, per second of data, from the MDF 4 and MAT
-files of the four runs. Target (issue 4): identification of one hour under 10 s.
+files of the four runs. Target: identification of one hour under 10 s.
 
 Usage: ``python benchmarks/bench_identify.py [--repeats N] [--hours H]``
 """

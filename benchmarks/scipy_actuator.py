@@ -196,6 +196,11 @@ def _regulator(r, y, u):
     return r[A.R_COIL] * i_ref + r[A.K_AMP] * (i_ref - y[I])
 
 
+def _within(v, v_sup):
+    """The regulating output stage's event function: its voltage's margin to either limit (>= 0 inside)."""
+    return min(v, v_sup - v)
+
+
 def _amp_mode(r, y, u):
     """The output stage's mode: saturated (1) above the supply voltage, freewheeling (-1) below zero, else 0."""
     v = _regulator(r, y, u)
@@ -306,7 +311,7 @@ def _events(m, modes, want_onset, u):
     elif ma == -1:
         ev.append(("amp", _event(lambda t, y, *_: -_regulator(m.r, y, u), -1)))
     else:
-        ev.append(("amp", _event(lambda t, y, *_: min(_regulator(m.r, y, u), v_sup - _regulator(m.r, y, u)), -1)))
+        ev.append(("amp", _event(lambda t, y, *_: _within(_regulator(m.r, y, u), v_sup), -1)))
     return ev
 
 

@@ -22,7 +22,7 @@ from wetclutch.ident.friction import measured_ratio
 from wetclutch.ident import recordings as channels
 from wetclutch.errors import WetclutchError
 from wetclutch.physics import actuator
-from wetclutch.plant import clutch, driveline
+from wetclutch.plant import driveline
 from wetclutch.report.identify import measured_cell
 from wetclutch.report import identify as identify_report
 from wetclutch.report import rig as rig_report

@@ -319,7 +319,6 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         "pass_rate": passed / len(judged) if judged else float("nan"),
         "pass_rate_interval": _interval(passed, len(judged)),
         "pass_rate_per_requirement": _rate(judged),
-        "pass_rate_random_samples": _rate(random_rows).get("all", float("nan")),
         "pass_rate_corners": _rate(corner_rows).get("all", float("nan")),
         "corners_passed": sum(r["all_pass"] for r in corner_rows),
         "corners": len(corner_rows),

@@ -29,7 +29,7 @@ def same_samples(ver: dict[str, Any], base: dict[str, Any]) -> dict[str, float]:
 def write(job: MainJob, out: str | Path) -> dict[str, Any]:
     """Write the main job's report into ``out`` (atomically); returns the content of ``summary.json``."""
     launches, ver, base = job.launches, job.verify, job.verify_baseline
-    keys = ("pass_rate", "pass_rate_interval", "pass_rate_per_requirement", "pass_rate_random_samples",
+    keys = ("pass_rate", "pass_rate_interval", "pass_rate_per_requirement",
             "pass_rate_corners", "corners_passed", "corners", "pass_rate_all_cases", "cases", "samples", "percentiles")
     with atomic_dir(out) as d:
         for i, (res, base_res) in enumerate(launches):

@@ -22,7 +22,6 @@ lasts a fixed time per experiment.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
