@@ -34,6 +34,11 @@ static value ``T_ss``
 ``ripple_pct``
     RMS of the smoothed ``T_r`` about ``T_ss`` over the steady window, in % of ``T_ss``: a
     sustained oscillation through the slip phase fails even when its mean is right.
+``oscillation_pct``
+    RMS of the smoothed ``T_r`` about its least-squares straight line over the steady window, in %
+    of ``T_ss``: the part of the ripple that oscillates rather than drifts (a torque that sags as the
+    clutch reaches its capacity near synchronisation, or still rises, has a ripple but no oscillation).
+    Reported, not judged: the ripple is.
 ``jerk_max``
     Largest rate of change of the smoothed ``T_r`` (N m/s) between the request
     and synchronisation: the vehicle's jerk is this over its inertia.
@@ -95,6 +100,7 @@ class Response:
     t95_settled_s: float
     overshoot_pct: float
     ripple_pct: float
+    oscillation_pct: float
     jerk_max: float
     creep_Nm: float
     standby_peak_Nm: float
@@ -103,7 +109,7 @@ class Response:
     @classmethod
     def empty(cls, standby: tuple[float, float] = (np.nan, np.nan),
               window: tuple[float, float] = (np.nan, np.nan)) -> Response:
-        return cls(np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, *standby, window)
+        return cls(np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, *standby, window)
 
 
 def _centred(t: np.ndarray, y: np.ndarray, width: float) -> np.ndarray:
@@ -185,10 +191,12 @@ def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_
     upto = after & (t <= w1)
     overshoot = max(0.0, (float(np.max(y[upto])) - T_ss) / T_ss * 100.0) if T_ss > 0 else np.nan
     ripple = float(np.sqrt(np.mean((y[win] - T_ss) ** 2)) / T_ss * 100.0) if T_ss > 0 else np.nan
+    line = np.polyval(np.polyfit(t[win] - w0, y[win], 1), t[win] - w0)
+    oscillation = float(np.sqrt(np.mean((y[win] - line) ** 2)) / T_ss * 100.0) if T_ss > 0 else np.nan
     slip = after & (t < t_end)
     rate = np.abs(np.diff(y)) / np.diff(t)
     jerk = float(np.max(rate[slip[1:]])) if np.any(slip[1:]) else np.nan
-    return Response(T_ss, ess, t95, settled, overshoot, ripple, jerk, *standby, (w0, w1))
+    return Response(T_ss, ess, t95, settled, overshoot, ripple, oscillation, jerk, *standby, (w0, w1))
 
 
 def requirements(r: Response, nominal: Response) -> dict[str, bool]:

@@ -53,8 +53,8 @@ HORIZON = metrics.STEADY_END + 0.15
 #: figures that need the launch run to lock-up
 LOCKUP_METRICS = ("slip_energy_J", "t_sync_s")
 N_BINS = 4
-METRICS = ("steady_state_error_pct", "t95_s", "t95_settled_s", "overshoot_pct", "ripple_pct", "jerk_max", "creep_Nm", "standby_peak_Nm",
-           "slip_energy_J", "t_sync_s", "contact_s", "input_at_max_pct")
+METRICS = ("steady_state_error_pct", "t95_s", "t95_settled_s", "overshoot_pct", "ripple_pct", "oscillation_pct",
+           "jerk_max", "creep_Nm", "standby_peak_Nm", "slip_energy_J", "t_sync_s", "contact_s", "input_at_max_pct")
 #: a failure with the valve input at the top of its range and the torque short of the request in at least this
 #: share of the steady window (%) is counted as one at the clutch's capacity
 CAPACITY_SHARE = 10.0

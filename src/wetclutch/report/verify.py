@@ -19,6 +19,7 @@ _METRICS = (("steady_state_error_pct", "steady-state error [%]", metrics.REQ_ESS
             ("t95_settled_s", "t95, settled [s]", metrics.REQ_T95_S),
             ("overshoot_pct", "overshoot [%]", None),
             ("ripple_pct", "ripple [%]", metrics.REQ_RIPPLE_PCT),
+            ("oscillation_pct", "oscillation [%]", None),
             ("creep_Nm", "creep before request [N m]", metrics.REQ_CREEP_NM))
 #: how each requirement reads in a table
 REQUIREMENT_LABELS = {
