@@ -22,6 +22,7 @@ modulus follow from :mod:`wetclutch.physics.oil`.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -99,15 +100,17 @@ def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str =
 
 
 def run(params: Params, u: Signal | float, t_end: float, *, pwm: bool = False, config: str = "clutch",
-        temp_C: float | None = None, dt_out: float = 1e-3, rtol: float = 1e-8,
+        temp_C: float | None = None, dt_out: float = 1e-3, rtol: float | None = None,
         atol: float | None = None) -> tuple[RigNetwork, Trajectory]:
     """The rig network driven by ``u`` (:func:`build`) integrated from rest to ``t_end``.
 
-    ``atol``: the absolute tolerance of every state but the valve stem's speed (:meth:`RigNetwork.atol`);
-    None: the engine's default for every state."""
+    ``rtol``: the engine's relative tolerance (None: its default); ``atol``: the absolute tolerance of every state
+    but the valve stem's speed (:meth:`RigNetwork.atol`; None: the engine's default for every state)."""
     rn = build(params, u, pwm=pwm, config=config, temp_C=temp_C)
-    tol = {} if atol is None else {"atol": rn.atol(atol)}
-    return rn, integrate(rn.network, t_end, dt_out=dt_out, rtol=rtol, **tol)
+    tol: dict[str, Any] = {} if rtol is None else {"rtol": rtol}
+    if atol is not None:
+        tol["atol"] = rn.atol(atol)
+    return rn, integrate(rn.network, t_end, dt_out=dt_out, **tol)
 
 
 def static_pressure(params: Params, u: Signal | float, *, pwm: bool = False, config: str = "clutch",
