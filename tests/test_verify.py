@@ -112,8 +112,12 @@ def test_the_pass_rate_is_the_random_samples_and_the_corners_stand_beside_it():
     rs = ranges.load()
     ctx = verify.Context(designs.cached(Params()), Params(), rs, "step", "", 1, False)
     figures = {k: 1.0 for k in verify.METRICS}
+    # random samples 8-11 ripple by 6 % of which 8 and 9 oscillate (10, 11: a drift); corners 0-3 oscillate, uncounted
+    shaky = {i: figures | {"ripple_pct": 6.0, "oscillation_pct": 6.0 if i in (0, 1, 2, 3, 8, 9) else 1.0}
+             for i in (0, 1, 2, 3, 8, 9, 10, 11)}
     # the first launch of each (the one right after a change) passes on every other random sample
-    rows = [{"index": i, "corner": i < 8, "values": {r.name: r.low for r in rs}, "metrics": figures, "slams": 0,
+    rows = [{"index": i, "corner": i < 8, "values": {r.name: r.low for r in rs}, "metrics": shaky.get(i, figures),
+             "slams": 0,
              "requirements": {k: ok for k in metrics.REQUIREMENTS}, "all_pass": ok, "first_all_pass": i % 2 == 0,
              "fill_too_slow": False, "replay": ""}
             for i, ok in enumerate([True] * 2 + [False] * 6 + [True] * 30 + [False] * 10)]
@@ -124,6 +128,7 @@ def test_the_pass_rate_is_the_random_samples_and_the_corners_stand_beside_it():
         == {(40, 0.75, 0.5)}
     assert (res["corners_passed"], res["corners"], res["pass_rate_corners"]) == (2, 8, 0.25)
     assert res["pass_rate_all_cases"] == 32 / 48
+    assert (res["rippling"], res["oscillating"]) == (4, 2)
     # Wilson's score interval, z the normal distribution's 97.5 % quantile
     z, n, p = 1.959963985, 40, 0.75
     mid, half = (p + z**2 / (2 * n)) / (1 + z**2 / n), z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / (1 + z**2 / n)

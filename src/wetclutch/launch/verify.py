@@ -259,6 +259,11 @@ def _interval(passed: int, n: int) -> list[float] | None:
     return [float(ci.low), float(ci.high)]
 
 
+def _above(rows: list[dict[str, Any]], metric: str, limit: float) -> int:
+    """How many of ``rows`` have ``metric`` above ``limit``."""
+    return sum(1 for r in rows if (r["metrics"].get(metric) or 0.0) > limit)
+
+
 def _rate(rows: list[dict[str, Any]]) -> dict[str, float]:
     if not rows:
         return {}
@@ -337,6 +342,10 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         # failures where the controller asked for all the valve gives: the clutch at or beyond its capacity
         "failures_at_capacity": sum(1 for r in results if not r["all_pass"]
                                     and (r["metrics"].get("input_at_max_pct") or 0) >= CAPACITY_SHARE),
+        # launches (random samples) whose torque oscillates about its trend by more than the ripple allowed: a
+        # sustained oscillation, told apart from a drift (a sag at the clutch's capacity) that fails the ripple too
+        "oscillating": _above(random_rows, "oscillation_pct", metrics.REQ_RIPPLE_PCT),
+        "rippling": _above(random_rows, "ripple_pct", metrics.REQ_RIPPLE_PCT),
         "bins": bins(results, ctx.ranges),
         "percentiles": pct,
         "worst": [{k: r[k] for k in ("index", "values", "metrics", "requirements", "replay")} for r in worst],

@@ -95,6 +95,10 @@ def verify_table(result: dict[str, Any]) -> str:
                   f"short of the request in at least {verify.CAPACITY_SHARE:g} % of the judged window: the "
                   "controller asked for all the valve gives, the clutch at or beyond its capacity there (supply "
                   "pressure, friction, CVT ratio, request).", ""]
+    lines += [f"Of the {result['samples']} random clutches, {result['rippling']} have a ripple above "
+              f"{metrics.REQ_RIPPLE_PCT:g} % of their torque over the judged window, {result['oscillating']} of them "
+              "an oscillation (the ripple about the torque's straight line: what oscillates rather than drifts) "
+              "above it.", ""]
     lines += ["| metric | p5 | p50 | p95 | p99 | max |", "|---|---|---|---|---|---|"]
     for key, label, _ in _METRICS:
         p = result["percentiles"].get(key) or {}
