@@ -340,7 +340,7 @@ def plant_settings(plant: Params, origin: dict[str, str] | None = None) -> dict[
                   " min(p_supply, p_relief)"),
         "valve_play": (v.I_hyst / v.g_current, f"plant ({_origin(origin, 'valve.I_hyst', 'valve.g_current')}): "
                        "I_hyst / g_current"),
-        "stroke_span": (h.k_reset * h.x_contact / h.A_p,
+        "stroke_span": (actuator.stroke_span(plant),
                         f"plant ({_origin(origin, 'hydraulics.k_reset', 'hydraulics.x_contact', 'hydraulics.A_p')}): "
                         "k_reset x_contact / A_p"),
     }

@@ -264,6 +264,11 @@ def _above(rows: list[dict[str, Any]], metric: str, limit: float) -> int:
     return sum(1 for r in rows if (r["metrics"].get(metric) or 0.0) > limit)
 
 
+def _share(rows: list[dict[str, Any]], key: str) -> float:
+    """The share of ``rows`` whose ``key`` is true (NaN: no rows)."""
+    return sum(r[key] for r in rows) / len(rows) if rows else float("nan")
+
+
 def _rate(rows: list[dict[str, Any]]) -> dict[str, float]:
     if not rows:
         return {}
@@ -282,9 +287,8 @@ def bins(results: list[dict[str, Any]], rs: list[ranges_mod.Range], n_bins: int 
         for i in range(n_bins):
             lo, hi = edges[i], edges[i + 1]
             inside = [r for r in rows if lo <= r["values"][rg.name] < hi or (i == n_bins - 1 and r["values"][rg.name] == hi)]
-            first = sum(r["first_all_pass"] for r in inside) / len(inside) if inside else float("nan")
             table.append({"low": float(lo), "high": float(hi), "samples": len(inside), "pass_rate": _rate(inside),
-                          "pass_rate_first_launch": first})
+                          "pass_rate_first_launch": _share(inside, "first_all_pass")})
         out[rg.name] = table
     return out
 
@@ -321,7 +325,7 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         "cases": total,
         "ranges": [{"name": r.name, "target": r.target, "how": r.how, "dist": r.dist, "low": r.low, "high": r.high,
                     "corner": r.corner, "unit": r.unit} for r in ctx.ranges],
-        "pass_rate": passed / len(judged) if judged else float("nan"),
+        "pass_rate": _share(judged, "all_pass"),
         "pass_rate_interval": _interval(passed, len(judged)),
         "pass_rate_per_requirement": _rate(judged),
         "pass_rate_corners": _rate(corner_rows).get("all", float("nan")),
@@ -330,9 +334,8 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         "pass_rate_all_cases": _rate(results).get("all", float("nan")),
         "sequence": ctx.sequence,
         "horizon_s": None if ctx.through_lockup else HORIZON,
-        "pass_rate_first_launch": sum(r["first_all_pass"] for r in judged) / len(judged) if judged else float("nan"),
-        "pass_rate_first_launch_corners": (sum(r["first_all_pass"] for r in corner_rows) / len(corner_rows)
-                                           if corner_rows else float("nan")),
+        "pass_rate_first_launch": _share(judged, "first_all_pass"),
+        "pass_rate_first_launch_corners": _share(corner_rows, "first_all_pass"),
         "slams": sum(r["slams"] for r in results),
         # failures whose plates first touched after the request: the fill was not complete when torque was asked for
         "failures_unfilled": sum(1 for r in results if not r["all_pass"] and (r["metrics"].get("contact_s") or 0) > 0),

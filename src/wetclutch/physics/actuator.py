@@ -346,10 +346,15 @@ def piston_positions(p, act):
 # ---------------------------------------------------------------- packing the record
 
 
+def stroke_span(params: Params) -> float:
+    """Pressure rise (Pa) over the piston's stroke, from the prestress to the kiss point: ``k_reset x_contact / A_p``."""
+    h = params.hydraulics
+    return h.k_reset * h.x_contact / h.A_p
+
+
 def contact_pressure(params: Params) -> float:
     """Pressure at which the plates touch (Pa), the kiss point: prestress plus the reset spring over the stroke."""
-    h = params.hydraulics
-    return h.p_prestress + h.k_reset * h.x_contact / h.A_p
+    return params.hydraulics.p_prestress + stroke_span(params)
 
 
 def pack(params: Params, temp_C: float, config: str = "clutch") -> np.ndarray:
