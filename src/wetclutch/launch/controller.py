@@ -164,7 +164,10 @@ N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power 
 (CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED, CS_KISS,
  CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF, CS_THETA_START, CS_THETA_N, CS_THETA_LEARNT, CS_DPF,
  CS_PPREV, CS_TMIN, CS_REF1, CS_ANSWERED, CS_TREQ, CS_KISS_LEARNT, CS_W1PEAK, CS_W1DROP, CS_HIGH, CS_STROKE) = range(33)
-N_CS = 33
+#: the fast-filtered pressure of the last N_RECENT samples (a ring from CS_RECENT on)
+CS_RECENT = 33
+N_RECENT = 16
+N_CS = CS_RECENT + N_RECENT
 #: time constant of the fast pressure filter (s)
 TAU_PF5 = 0.005
 #: the fill's steep rise has ended once the fast-filtered pressure rises slower than this (Pa/s), the stroke's ramp
@@ -456,8 +459,10 @@ def _find_kiss(ctrl, cs, meas, t_ref, phase, dt):
 
     The steep pressure rise at contact (:data:`JUMP`) places it where the stroke's pressure ended; a gentle
     approach, which has no such rise, is placed by the torque onset (the filtered ``T_r`` above
-    :data:`ONSET_NM`): the measured pressure less what the nominal friction law needs for that torque. A clutch that holds at the believed kiss point without any
-    torque has it higher: the belief then rises at :data:`SEARCH_RATE` until the torque comes, once the pressure is
+    :data:`ONSET_NM`): the measured pressure less what the nominal friction law needs for that torque, and no higher
+    than the pressure of the last :data:`N_RECENT` samples (a slam that the calm-stroke test did not arm, as in a fast
+    stroke of warm oil, reaches the onset only once its pressure is far beyond the contact). A clutch that holds at
+    the believed kiss point without any torque has it higher: the belief then rises at :data:`SEARCH_RATE` until the torque comes, once the pressure is
     within :data:`SEARCH_LEAD` of the design's kiss point or within :data:`SEARCH_NEAR` of a learnt one (which is
     seldom far off, while a slow stroke in cold oil is still short of it). Before it is found, the kiss point is
     the one learnt on earlier launches (the loop sets it and ``CS_KISS_LEARNT``) or the design's.
@@ -473,7 +478,12 @@ def _find_kiss(ctrl, cs, meas, t_ref, phase, dt):
         cs[CS_KISS] = cs[CS_PF] - JUMP / 3.0
         cs[CS_FOUND] = 1.0
     elif phase != FILL and cs[CS_TF] - cs[CS_TREF] > ONSET_NM:
-        cs[CS_KISS] = _kiss_under(ctrl, meas, cs[CS_PF], ONSET_NM)
+        # no higher than the pressure of the last N_RECENT samples: in a slam the plates touched before the jump,
+        # which the filtered torque reaches only once the pressure has risen far beyond it
+        low = cs[CS_RECENT]
+        for i in range(1, N_RECENT):
+            low = min(low, cs[CS_RECENT + i])
+        cs[CS_KISS] = min(_kiss_under(ctrl, meas, cs[CS_PF], ONSET_NM), low)
         cs[CS_FOUND] = 1.0
     elif (phase == HOLD and t_ref <= 0.0 and cs[CS_DIP] <= 0.0
           and cs[CS_PF] > cs[CS_KISS] - (SEARCH_NEAR if cs[CS_KISS_LEARNT] != 0.0 else SEARCH_LEAD)):
@@ -524,6 +534,10 @@ def _launch(ctrl, cs, meas, t_ref):
     cs[CS_PF] = p if first else cs[CS_PF] + (p - cs[CS_PF]) * dt / (0.02 + dt)
     cs[CS_TF] = meas[M_TR] if first else cs[CS_TF] + (meas[M_TR] - cs[CS_TF]) * dt / (0.02 + dt)
     cs[CS_PF5] = p if first else cs[CS_PF5] + (p - cs[CS_PF5]) * dt / (TAU_PF5 + dt)
+    if first:
+        for i in range(N_RECENT):
+            cs[CS_RECENT + i] = p
+    cs[CS_RECENT + int(cs[CS_N]) % N_RECENT] = cs[CS_PF5]
     rate = 0.0 if first else (p - cs[CS_PPREV]) / dt
     cs[CS_DPF] += (rate - cs[CS_DPF]) * dt / (TAU_DP + dt)
     cs[CS_PPREV] = p
