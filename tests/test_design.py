@@ -113,7 +113,9 @@ def test_the_shipped_ranges_cover_what_drifts():
     assert (rs["oil_temp"].low, rs["oil_temp"].high) == (10.0, 100.0)
     assert rs["output_inertia"].high == 10.0 and (rs["cvt_ratio"].low, rs["cvt_ratio"].high) == (0.4, 1.0)
     assert rs["request"].low == 25.0 and rs["request"].high == 200.0
-    ranges.check(list(rs.values()), Params())
+    # on the built-in rig every shipped range lies within the physical range: nothing is limited
+    fitted, notes = ranges.fit(list(rs.values()), Params())
+    assert fitted == list(rs.values()) and notes == []
 
 
 def test_ranges_apply_relative_offset_and_absolute_values(plant):
@@ -149,10 +151,33 @@ def test_bad_ranges_are_one_line_errors_naming_the_range(data, fragment):
     assert fragment in str(e.value) and "\n" not in str(e.value)
 
 
-def test_ranges_that_leave_the_physical_range_are_refused_up_front():
-    rs = ranges.parse({"kiss": {"target": "hydraulics.p_prestress", "how": "offset", "low": -1e5, "high": 0.0}})
-    with pytest.raises(ranges.RangesError, match=r"\[kiss\] at -100000"):
-        ranges.check(rs, Params())
+def test_ranges_relative_to_the_plant_are_limited_to_its_physical_range():
+    # a prestress 1 bar lower on a clutch whose prestress is 0.5 bar stops at zero; entrained air 200 times the
+    # plant's 0.005 stops below a volume fraction of 0.5; what stays within is left as it is
+    rs = ranges.parse({"kiss": {"target": "hydraulics.p_prestress", "how": "offset", "low": -1e5, "high": 0.2e5},
+                       "air": {"target": "hydraulics.air_fraction", "how": "rel", "low": 0.5, "high": 200.0},
+                       "ratio": {"target": "driveline.ratio", "low": 0.4, "high": 1.0}})
+    fitted, notes = ranges.fit(rs, Params())
+    by = {r.name: r for r in fitted}
+    assert by["kiss"].low == pytest.approx(-0.5e5, abs=1.0) and by["kiss"].high == 0.2e5
+    assert by["air"].low == 0.5 and by["air"].high == pytest.approx(100.0, abs=1e-3)
+    assert by["ratio"] == rs[2]
+    assert len(notes) == 2 and notes[0].startswith("kiss") and notes[1].startswith("air")
+    for r in fitted:
+        for end in (r.low, r.high):
+            ranges.apply([r], {r.name: end}, Params())  # raises if out of the physical range
+
+
+@pytest.mark.parametrize("data, fragment", [
+    # an absolute range does not depend on the plant: an end out of the physical range is the file's error
+    ({"x": {"target": "hydraulics.air_fraction", "low": 0.0, "high": 0.7}}, r"\[x\] at 0.7"),
+    # no value of the range is within it
+    ({"kiss": {"target": "hydraulics.p_prestress", "how": "offset", "low": -2e5, "high": -1e5}}, r"\[kiss\] at -200000"),
+])
+def test_ranges_that_leave_the_physical_range_are_refused_up_front(data, fragment):
+    with pytest.raises(ranges.RangesError, match=fragment) as e:
+        ranges.fit(ranges.parse(data), Params())
+    assert "\n" not in str(e.value)
 
 
 _value = st.one_of(st.floats(allow_nan=True), st.integers(-5, 5), st.text(max_size=5), st.booleans(),

@@ -98,6 +98,17 @@ def test_bins_partition_the_random_samples(small_run):
     assert set(res["pass_rate_per_requirement"]) == set(metrics.REQUIREMENTS) | {"all"}
 
 
+def test_the_default_ranges_verify_a_clutch_with_a_low_prestress():
+    # the shipped kiss-point range moves the prestress by -0.3..+0.3 bar; on a clutch whose prestress is 0.1 bar it
+    # stops at zero, and the run says so
+    plant = load(overrides={"hydraulics.p_prestress": 0.1e5})
+    r = verify.run(designs.cached(plant), plant, n=3, seed=2, workers=1, corners=False, progress=False)
+    kiss = next(rg for rg in r["ranges"] if rg["name"] == "kiss_point")
+    assert kiss["low"] == pytest.approx(-0.1e5, abs=1.0) and kiss["high"] == 0.3e5
+    assert len(r["ranges_limited"]) == 1 and r["ranges_limited"][0].startswith("kiss_point")
+    assert all(x["metrics"] for x in r["results"])
+
+
 def test_bad_options():
     d = designs.cached(Params())
     with pytest.raises(WetclutchError, match="--samples"):

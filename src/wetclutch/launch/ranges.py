@@ -20,7 +20,7 @@ from __future__ import annotations
 import itertools
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -192,13 +192,44 @@ def apply(ranges: list[Range], values: dict[str, float], plant: Params) -> tuple
     return (load_params(None, sets, base=plant) if sets else plant), cond
 
 
-def check(ranges: list[Range], plant: Params) -> None:
-    """Refuse ranges that take a parameter of ``plant`` out of its physical range (one line naming the range)."""
+def _valid(r: Range, x: float, plant: Params) -> bool:
+    try:
+        apply([r], {r.name: x}, plant)
+    except WetclutchError:
+        return False
+    return True
+
+
+def fit(ranges: list[Range], plant: Params) -> tuple[list[Range], list[str]]:
+    """The ranges as they apply to ``plant``: a range relative to the plant (``rel``, ``offset``) whose end would take
+    a parameter out of its physical range is limited to the part within it (a prestress 0.3 bar low on a clutch
+    whose prestress is 0.2 bar stops at zero), found by bisection to a millionth of the range; returns the ranges
+    and one sentence per limited range. Refuses (one line naming the range) an absolute range with an end out of
+    the physical range, and a range with no value within it."""
+    out, notes = [], []
     for r in ranges:
-        if r.is_condition:
+        if r.is_condition or (_valid(r, r.low, plant) and _valid(r, r.high, plant)):
+            out.append(r)
             continue
-        for end in (r.low, r.high):
+        bad = r.low if not _valid(r, r.low, plant) else r.high
+        inside = 1.0 if r.how == "rel" else 0.0
+        if r.how == "abs" or not r.low <= inside <= r.high:
             try:
-                apply([r], {r.name: end}, plant)
+                apply([r], {r.name: bad}, plant)
             except WetclutchError as e:
-                raise RangesError(f"range [{r.name}] at {end:g} leaves the plant's physical range: {e}") from None
+                raise RangesError(f"range [{r.name}] at {bad:g} leaves the plant's physical range: {e}") from None
+        ends = []
+        for end in (r.low, r.high):
+            ok, out_ = inside, end
+            if not _valid(r, end, plant):
+                while abs(out_ - ok) > 1e-6 * (r.high - r.low):
+                    mid = 0.5 * (ok + out_)
+                    ok, out_ = (mid, out_) if _valid(r, mid, plant) else (ok, mid)
+            else:
+                ok = end
+            ends.append(ok)
+        fitted = replace(r, low=ends[0], high=ends[1])
+        out.append(fitted)
+        notes.append(f"{r.name} ({r.target}, {r.how}) limited from {r.low:g}..{r.high:g} to {fitted.low:g}..{fitted.high:g} "
+                     "on this plant: beyond, the parameter leaves its physical range")
+    return out, notes

@@ -81,6 +81,8 @@ class Context:
     replay_args: str = ""
     sequence: int = 1
     through_lockup: bool = False
+    #: the ranges limited to the plant's physical range (:func:`wetclutch.launch.ranges.fit`), a sentence each
+    limited: tuple[str, ...] = ()
 
     def case(self, sample: Sample) -> tuple[Params, launch.Conditions]:
         plant, cond = ranges_mod.apply(self.ranges, sample.values, self.plant)
@@ -217,10 +219,9 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
     check_options(n, seed, workers)
     launch.check_sequence(sequence)
     plant = plant if plant is not None else design.plant
-    rs = ranges if ranges is not None else ranges_mod.load()
-    ranges_mod.check(rs, plant)
+    rs, limited = ranges_mod.fit(ranges if ranges is not None else ranges_mod.load(), plant)
     ctx = Context(design, plant, rs, profile, replay_args + (f" --sequence {sequence}" if sequence > 1 else ""),
-                  sequence, through_lockup)
+                  sequence, through_lockup, tuple(limited))
     workers = workers or os.cpu_count() or 1
     cases = samples(ctx, n, seed, corners)
     # the design's nominal responses, made once here and inherited by the forked workers
@@ -325,6 +326,7 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         "cases": total,
         "ranges": [{"name": r.name, "target": r.target, "how": r.how, "dist": r.dist, "low": r.low, "high": r.high,
                     "corner": r.corner, "unit": r.unit} for r in ctx.ranges],
+        "ranges_limited": list(ctx.limited),
         "pass_rate": _share(judged, "all_pass"),
         "pass_rate_interval": _interval(passed, len(judged)),
         "pass_rate_per_requirement": _rate(judged),

@@ -133,6 +133,9 @@ def bins_table(result: dict[str, Any]) -> str:
              "samples in it.", "",
              "| range | varies | " + " | ".join(f"bin {i + 1}" for i in range(4)) + " | fails most in the worst bin |",
              "|---|---|" + "---|" * 4 + "---|"]
+    if result.get("ranges_limited"):
+        lines[:0] = ["Ranges limited to what this plant can physically take: " + "; ".join(result["ranges_limited"])
+                     + ".", ""]
     for rg in result["ranges"]:
         table = result["bins"][rg["name"]]
         how = {"abs": "", "rel": " x", "offset": " +"}[rg["how"]]
