@@ -76,6 +76,17 @@ def test_the_baseline_keeps_its_margins_over_the_corners():
     assert min(r["gain_margin"] for r in rows) > 2.5 and min(r["phase_margin_deg"] for r in rows) > 55.0
 
 
+def test_the_corners_of_a_low_prestress_clutch_stay_within_its_physical_range():
+    # the kiss point's corners move the prestress by -0.3 and +0.3 bar; on a clutch whose prestress is 0.1 bar the
+    # lower one stops at zero (as in the verification) instead of stopping the report
+    plant = Params().model_copy(update={"hydraulics": Params().hydraulics.model_copy(update={"p_prestress": 0.1e5})})
+    rs = ranges.parse({"kiss": {"target": "hydraulics.p_prestress", "how": "offset", "low": -0.3e5, "high": 0.3e5,
+                                "corner": True}})
+    rows = margins.over_corners(designs.cached(plant, "baseline"), plant, rs)
+    assert [r["corner"]["kiss"] for r in rows] == [pytest.approx(-0.1e5, abs=1.0), 0.3e5]
+    assert all(r["gain_margin"] > 1.0 for r in rows)
+
+
 def test_the_launch_loops_margins_predict_where_the_simulated_launch_oscillates():
     # a heavy clutch output (J_1 x 10) at the shortest ratio: its resonance on the axle (about 14 Hz) falls to where a
     # fast friction-factor estimate closes a loop through it. The linear analysis and the nonlinear launch must agree

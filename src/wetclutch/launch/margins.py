@@ -155,6 +155,7 @@ LAUNCH_LOOP_RANGES = ("stem_damping", "oil_temp", "output_inertia", "cvt_ratio",
 def launch_over_corners(design: Design, plant: Params, rs: list[ranges_mod.Range]) -> list[dict]:
     """Launch loop margins at every combination of the extremes of :data:`LAUNCH_LOOP_RANGES` present in ``rs``
     (the other ranges at their nominal values); the valve's step is fitted once per valve corner."""
+    rs, _ = ranges_mod.fit(rs, plant)
     names = [r.name for r in rs if r.name in LAUNCH_LOOP_RANGES]
     loop_rs = [replace(r, corner=r.name in names) for r in rs]
     base = {"oil_temp_C": plant.rig.oil_temp_C, "t_ref": 100.0, "noise_scale": 1.0}
@@ -175,9 +176,11 @@ def launch_over_corners(design: Design, plant: Params, rs: list[ranges_mod.Range
 
 
 def over_corners(design: Design, plant: Params, rs: list[ranges_mod.Range]) -> list[dict]:
-    """Margins at every corner of ``rs`` (conditions other than the oil temperature do not enter the linear loop)."""
+    """Margins at every corner of ``rs`` as it applies to ``plant`` (:func:`wetclutch.launch.ranges.fit`; conditions
+    other than the oil temperature do not enter the linear loop)."""
     out = []
     base_temp = plant.rig.oil_temp_C
+    rs, _ = ranges_mod.fit(rs, plant)
     for corner in ranges_mod.corners(rs):
         p, cond = ranges_mod.apply(rs, corner, plant)
         m = margins(design, p, cond.get("oil_temp_C", base_temp))
