@@ -10,9 +10,9 @@ path of :class:`~wetclutch.params.Params`) or one launch condition (:data:`CONDI
   minus and plus two standard deviations (truncated there);
 * ``corner = true``: the corner cases take this range's extremes.
 
-:func:`load` validates a file (one-line errors naming the range and key);
-:func:`draw` and :func:`corners` turn ranges into values; :func:`apply` puts values into
-a plant.
+:func:`load` validates a file (one-line errors naming the range and key); :func:`fit`
+limits the ranges to what a plant can physically take; :func:`draw` and :func:`corners`
+turn ranges into values; :func:`apply` puts values into a plant.
 """
 
 from __future__ import annotations
@@ -200,6 +200,15 @@ def _valid(r: Range, x: float, plant: Params) -> bool:
     return True
 
 
+def _edge(r: Range, inside: float, end: float, plant: Params) -> float:
+    """The value nearest ``end`` on the way from ``inside`` (valid) that keeps ``r`` within the physical range."""
+    ok, bad = inside, end
+    while abs(bad - ok) > 1e-6 * (r.high - r.low):
+        mid = 0.5 * (ok + bad)
+        ok, bad = (mid, bad) if _valid(r, mid, plant) else (ok, mid)
+    return ok
+
+
 def fit(ranges: list[Range], plant: Params) -> tuple[list[Range], list[str]]:
     """The ranges as they apply to ``plant``: a range relative to the plant (``rel``, ``offset``) whose end would take
     a parameter out of its physical range is limited to the part within it (a prestress 0.3 bar low on a clutch
@@ -208,28 +217,19 @@ def fit(ranges: list[Range], plant: Params) -> tuple[list[Range], list[str]]:
     the physical range, and a range with no value within it."""
     out, notes = [], []
     for r in ranges:
-        if r.is_condition or (_valid(r, r.low, plant) and _valid(r, r.high, plant)):
+        valid = [r.is_condition or _valid(r, end, plant) for end in (r.low, r.high)]
+        if all(valid):
             out.append(r)
             continue
-        bad = r.low if not _valid(r, r.low, plant) else r.high
-        inside = 1.0 if r.how == "rel" else 0.0
+        inside = 1.0 if r.how == "rel" else 0.0  # the plant's own value
         if r.how == "abs" or not r.low <= inside <= r.high:
+            bad = r.high if valid[0] else r.low
             try:
                 apply([r], {r.name: bad}, plant)
             except WetclutchError as e:
                 raise RangesError(f"range [{r.name}] at {bad:g} leaves the plant's physical range: {e}") from None
-        ends = []
-        for end in (r.low, r.high):
-            ok, out_ = inside, end
-            if not _valid(r, end, plant):
-                while abs(out_ - ok) > 1e-6 * (r.high - r.low):
-                    mid = 0.5 * (ok + out_)
-                    ok, out_ = (mid, out_) if _valid(r, mid, plant) else (ok, mid)
-            else:
-                ok = end
-            ends.append(ok)
-        fitted = replace(r, low=ends[0], high=ends[1])
-        out.append(fitted)
-        notes.append(f"{r.name} ({r.target}, {r.how}) limited from {r.low:g}..{r.high:g} to {fitted.low:g}..{fitted.high:g} "
+        low, high = (end if ok else _edge(r, inside, end, plant) for end, ok in zip((r.low, r.high), valid))
+        out.append(replace(r, low=low, high=high))
+        notes.append(f"{r.name} ({r.target}, {r.how}) limited from {r.low:g}..{r.high:g} to {low:g}..{high:g} "
                      "on this plant: beyond, the parameter leaves its physical range")
     return out, notes
