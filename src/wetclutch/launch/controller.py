@@ -462,9 +462,10 @@ def _find_kiss(ctrl, cs, meas, t_ref, phase, dt):
     :data:`ONSET_NM`): the measured pressure less what the nominal friction law needs for that torque, and no higher
     than the pressure of the last :data:`N_RECENT` samples (a slam that the calm-stroke test did not arm, as in a fast
     stroke of warm oil, reaches the onset only once its pressure is far beyond the contact). A clutch that holds at
-    the believed kiss point without any torque has it higher: the belief then rises at :data:`SEARCH_RATE` until the torque comes, once the pressure is
-    within :data:`SEARCH_LEAD` of the design's kiss point or within :data:`SEARCH_NEAR` of a learnt one (which is
-    seldom far off, while a slow stroke in cold oil is still short of it). Before it is found, the kiss point is
+    the believed kiss point without any torque has it higher: the belief then rises at :data:`SEARCH_RATE` until
+    the torque comes, once the pressure is within :data:`SEARCH_LEAD` of the design's kiss point or within
+    :data:`SEARCH_NEAR` of a learnt one (which is seldom far off, while a slow stroke in cold oil is still short of
+    it). Before it is found, the kiss point is
     the one learnt on earlier launches (the loop sets it and ``CS_KISS_LEARNT``) or the design's.
     """
     if cs[CS_FOUND] != 0.0:

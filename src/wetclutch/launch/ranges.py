@@ -192,12 +192,13 @@ def apply(ranges: list[Range], values: dict[str, float], plant: Params) -> tuple
     return (load_params(None, sets, base=plant) if sets else plant), cond
 
 
-def _valid(r: Range, x: float, plant: Params) -> bool:
+def _error(r: Range, x: float, plant: Params) -> WetclutchError | None:
+    """Why ``r`` at ``x`` leaves ``plant``'s physical range (None: it does not)."""
     try:
         apply([r], {r.name: x}, plant)
-    except WetclutchError:
-        return False
-    return True
+    except WetclutchError as e:
+        return e
+    return None
 
 
 def _edge(r: Range, inside: float, end: float, plant: Params) -> float:
@@ -205,7 +206,7 @@ def _edge(r: Range, inside: float, end: float, plant: Params) -> float:
     ok, bad = inside, end
     while abs(bad - ok) > 1e-6 * (r.high - r.low):
         mid = 0.5 * (ok + bad)
-        ok, bad = (mid, bad) if _valid(r, mid, plant) else (ok, mid)
+        ok, bad = (mid, bad) if _error(r, mid, plant) is None else (ok, mid)
     return ok
 
 
@@ -217,18 +218,15 @@ def fit(ranges: list[Range], plant: Params) -> tuple[list[Range], list[str]]:
     the physical range, and a range with no value within it."""
     out, notes = [], []
     for r in ranges:
-        valid = [r.is_condition or _valid(r, end, plant) for end in (r.low, r.high)]
-        if all(valid):
+        errors = [None if r.is_condition else _error(r, end, plant) for end in (r.low, r.high)]
+        if errors == [None, None]:
             out.append(r)
             continue
         inside = 1.0 if r.how == "rel" else 0.0  # the plant's own value
         if r.how == "abs" or not r.low <= inside <= r.high:
-            bad = r.high if valid[0] else r.low
-            try:
-                apply([r], {r.name: bad}, plant)
-            except WetclutchError as e:
-                raise RangesError(f"range [{r.name}] at {bad:g} leaves the plant's physical range: {e}") from None
-        low, high = (end if ok else _edge(r, inside, end, plant) for end, ok in zip((r.low, r.high), valid))
+            bad, e = next((end, e) for end, e in zip((r.low, r.high), errors) if e is not None)
+            raise RangesError(f"range [{r.name}] at {bad:g} leaves the plant's physical range: {e}")
+        low, high = (end if e is None else _edge(r, inside, end, plant) for end, e in zip((r.low, r.high), errors))
         out.append(replace(r, low=low, high=high))
         notes.append(f"{r.name} ({r.target}, {r.how}) limited from {r.low:g}..{r.high:g} to {low:g}..{high:g} "
                      "on this plant: beyond, the parameter leaves its physical range")
