@@ -130,6 +130,31 @@ def test_a_learnt_kiss_point_is_not_searched_above_while_a_cold_stroke_is_still_
     assert runs[2].summary["creep_Nm"] <= metrics.REQ_CREEP_NM
 
 
+def test_a_request_on_a_hold_a_little_below_the_kiss_point_neither_jumps_the_set_point_nor_winds_up():
+    # a controller designed on a plant with a 0.8 bar prestress and a short stroke, run cold (16 C) on a clutch whose
+    # kiss point lies 0.2 bar lower, with a small request. From the second launch on the hold
+    # starts from the learnt kiss point, but its pressure sits 0.01 to 0.03 bar below it (the hold's integrator
+    # waits for the kiss point, since a stroking piston's flow makes the pressure droop). A request judged to wait
+    # for the fill there lifted the set point 0.3 bar above plates that already touch, and an integrator that wound
+    # up against the last of the stroke opened the valve as wide: the pressure slammed to 1.7-1.9 bar, the torque
+    # overshot by 20-60 % and the plates bounced open (0 of the 8 later launches within 10 % and 0.2 s)
+    base = load(overrides={
+        "driveline.J_p": 1.0, "driveline.J_s": 7.5, "driveline.ratio": 0.65, "hydraulics.p_prestress": 0.8e5,
+        "hydraulics.x_contact": 1.04e-3, "friction.mu_slip_poly": [-2.16e-06, 3.13e-4, 0.0239], "rig.oil_temp_C": 63.0})
+    plant = load(base=base, overrides={
+        "driveline.J_1": 0.002, "driveline.ratio": 0.83, "driveline.k_a": 527.0, "engage.T_load": 20.0,
+        "valve.d_stem": 66.5, "hydraulics.p_supply": 7.2e5, "hydraulics.line_length": 1.18,
+        "hydraulics.p_prestress": 0.58e5, "hydraulics.leak_85C": 2.9e-12, "hydraulics.air_fraction": 0.0063,
+        "friction.mu_scale": 1.21, "friction.mu_slope": 1.39})
+    d = design.cached(base, "launch")
+    later = []
+    for seed in range(1, 5):
+        runs = loop.sequence(plant, d, loop.Conditions(t_ref=26.5, oil_temp_C=16.1, seed=seed, t_max=2.45), 3)
+        later += [r.summary for r in runs[1:]]
+    good = [s["overshoot_pct"] < metrics.ROBUST_OVERSHOOT and s["t95_settled_s"] < metrics.REQ_T95_S for s in later]
+    assert sum(good) >= 6, [(round(s["overshoot_pct"], 1), round(s["t95_settled_s"], 3)) for s in later]
+
+
 @pytest.mark.parametrize("scale", [0.8, 1.2])
 def test_a_friction_level_off_the_design_is_learnt_and_the_next_launch_starts_from_it(scale):
     # the controller is designed on the defaults; the clutch's friction is 20 % lower or higher. The estimate is the

@@ -96,7 +96,8 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       several bar and the drain only with the clutch pressure, and the
       pressure would creep up and slam at contact.
     * **A request during the fill.** If the request comes before the filtered
-      pressure has reached the hold (cold oil, a long line, a late kiss point),
+      pressure has come within :data:`FILLED_NEAR` of the hold (cold oil, a long
+      line, a late kiss point),
       the gentle, lead-limited approach of the hold would crawl; the set point
       then jumps to ``req_lead`` above the hold so that the valve opens and the
       fill completes: a jolt at contact is then only the torque arriving. The
@@ -235,6 +236,11 @@ PLATE_NM = 1.0
 #: the hold's pressure this far (Pa) above its set point is trapped: the stem sits in its overlap and the magnet
 #: on its rising branch, and the drain opens only once the input has crossed the play
 TRAPPED = 0.05e5
+#: a request finds the fill complete once the filtered pressure is this close to the hold (Pa). The hold's pressure
+#: may sit a little below the kiss point for good (its integrator waits for the kiss point, see the pressure loop),
+#: and a request judged to wait for the fill there would lift the set point ``req_lead`` above plates that already
+#: touch: the pressure slams up, the torque overshoots and the plates bounce open
+FILLED_NEAR = 0.05e5
 #: half-width (Pa) of the band about ``dither_high_above`` within which the torque dither keeps its frequency
 DITHER_BAND = 0.1e5
 FILL, HOLD, TORQUE, LOCKUP = 0, 1, 2, 3
@@ -333,7 +339,7 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     # until the fill is complete (cold oil, long line) the request waits, and the
     # integrator with it: it would only wind up against a clutch that cannot answer yet
     # (latched: once filled, noise on the filtered pressure must not stop the request again)
-    gated = cs[CS_FILLED] == 0.0 and cs[CS_PF] < p_hold
+    gated = cs[CS_FILLED] == 0.0 and cs[CS_PF] < p_hold - FILLED_NEAR
     if not gated:
         cs[CS_FILLED] = 1.0
         # the request through a critically damped prefilter (two first-order stages): a torque step
@@ -406,10 +412,11 @@ def _pressure_loop(ctrl, cs, p_set, p, temp, hold, dt):
     # lag of a stiffly damped stem leaves that loop underdamped, and feedback of the pressure's rate damps it
     damp = 0.0 if hold else ctrl[KD_P] * cs[CS_DPF]
     u = _table(ctrl, temp, p_set) - shift + cs[CS_ZP] + kp * e_p - damp
-    if trapped or (hold and cs[CS_PF] < cs[CS_KISS]):
+    if trapped or ((hold or cs[CS_ANSWERED] == 0.0) and cs[CS_PF] < cs[CS_KISS]):
         # no integration: a trapped pressure's error is the play's, not the map's; and while the piston
-        # still strokes, the flow it takes makes the pressure droop below the valve's static equilibrium,
-        # and an integrator wound up against that droop slams the pressure up when the plates stop the piston
+        # still strokes (in the hold, and after a request until the plates answer), the flow it takes makes the
+        # pressure droop below the valve's static equilibrium, and an integrator wound up against that droop
+        # slams the pressure up when the plates stop the piston
         ki = 0.0
     if u > ctrl[U_MAX]:
         u = ctrl[U_MAX]
