@@ -97,12 +97,12 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       pressure would creep up and slam at contact.
     * **A request during the fill.** If the request comes before the filtered
       pressure has come within :data:`FILLED_NEAR` of the hold (cold oil, a long
-      line, a late kiss point),
-      the gentle, lead-limited approach of the hold would crawl; the set point
-      then jumps to ``req_lead`` above the hold so that the valve opens and the
-      fill completes: a jolt at contact is then only the torque arriving. The
-      request itself waits until the fill is complete (latched, so that noise
-      on the filtered pressure cannot stop it again).
+      line, a late kiss point), the gentle, lead-limited approach of the hold
+      would crawl; the set point then jumps to ``req_lead`` above the hold so
+      that the valve opens and the fill completes: a jolt at contact is then
+      only the torque arriving. The request itself waits until the fill is
+      complete (latched, so that noise on the filtered pressure cannot stop it
+      again).
     * **Plates that do not answer.** Once torque is requested, the plates should
       answer at once (the hold has them touching). Until the axle torque rises or
       the clutch output turns, the kiss point was believed too low: the pressure
