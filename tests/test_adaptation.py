@@ -206,3 +206,27 @@ def test_cli_sequence_writes_the_state_and_resumes_from_it(tmp_path):
     assert main(["launch", "--out", str(tmp_path / "next"), "--adaptation", str(out / "adaptation.toml"), *args]) == 0
     nxt = adaptation.load(tmp_path / "next" / "adaptation.toml")
     assert nxt.launches[adaptation.band(60.0)] == 3
+
+
+def test_where_cold_drag_takes_most_of_the_creep_allowed_the_hold_keeps_the_plates_apart():
+    # the default design on a clutch at 14.7 C and a short CVT ratio (0.4): the open plates' drag alone pushes the
+    # waiting vehicle with some 6-7 N m of the 10 allowed. Held at the kiss point, the hold's pressure wandered
+    # 0.05-0.1 bar above it (the magnet's play; a valve whose static map differs from the design's) and the
+    # creep came out at 11-12.5 N m on the launches after the first (0 of 9 within the limit, mean 11.8 N m; now 8 of
+    # 9, mean 8.0 N m, on the host this was written on)
+    plant = load(overrides={
+        "driveline.J_1": 0.00885, "driveline.ratio": 0.40, "driveline.eta": 0.924, "driveline.k_a": 557.0,
+        "engage.T_load": 20.6, "valve.d_stem": 69.9, "hydraulics.p_supply": 7.42e5, "hydraulics.line_length": 1.51,
+        "hydraulics.p_prestress": 0.385e5, "hydraulics.x_contact": 1.265e-3, "hydraulics.leak_85C": 1.78e-12,
+        "hydraulics.air_fraction": 0.0097, "friction.mu_scale": 1.11})
+    d = design.cached(Params(), "launch")
+    later = []
+    for seed in range(1, 4):
+        cond = loop.Conditions(t_ref=123.0, oil_temp_C=14.7, seed=seed, noise_scale=1.5, t_max=2.45)
+        later += [r.summary for r in loop.sequence(plant, d, cond, 4)[1:]]
+    creep = [s["creep_Nm"] for s in later]
+    assert sum(creep) / len(creep) < 0.9 * metrics.REQ_CREEP_NM, creep
+    assert sum(c <= metrics.REQ_CREEP_NM for c in creep) >= 6, creep
+    # the plates a little apart cost the response little: the request's lead closes them (settled t95 0.164-0.180 s
+    # before, 0.130-0.176 s now)
+    assert all(s["t95_settled_s"] < metrics.REQ_T95_S for s in later), [s["t95_settled_s"] for s in later]
