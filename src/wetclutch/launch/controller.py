@@ -239,8 +239,8 @@ TAU_CREEP_KISS = 0.1
 CREEP_SHARE = 0.8
 PLATE_NM = 1.0
 #: where the open plates' drag takes DRAG_SHARE of ``creep_limit`` or more, the hold keeps the plates this far (Pa)
-#: short of the kiss point. Over 600 cold clutches (10-16 C, four launches each) the launches within the creep limit
-#: went from 91.3 to 95.2 % (97.2 % at 0.04 bar, with twice the slams at the request)
+#: short of the kiss point. Of 600 cold clutches (10-16 C, four launches each) 95.2 % wait within the creep limit
+#: (91.3 % held at the kiss point; 97.2 % at 0.04 bar apart, with twice the slams at the request)
 HOLD_APART = 0.02e5
 DRAG_SHARE = 0.5
 #: the hold's pressure this far (Pa) above its set point is trapped: the stem sits in its overlap and the magnet
