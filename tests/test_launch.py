@@ -270,3 +270,19 @@ def test_the_torque_dither_is_faster_high_in_the_pressure_range(t_ref, hz_settin
     edges = np.flatnonzero(np.abs(np.diff(u)) > d.settings["dither_amp_torque"])
     half = np.median(np.diff(edges))
     assert half == round(0.5 / (d.settings[hz_setting] * 1e-3))
+
+
+@pytest.mark.parametrize("mu_slope, t_ref, oil_temp_C", [(0.55, 180.0, 60.0), (0.5, 190.0, 85.0)])
+def test_a_friction_curve_flatter_than_the_designs_does_not_slow_the_response(mu_slope, t_ref, oil_temp_C):
+    # a clutch whose mu falls with slip along a quadratic curve (a quarter higher at 110 rad/s of slip than at 138),
+    # designed on that curve, running with one half as steep at a CVT ratio of 0.5: as the slip falls, the design's
+    # law expects more of the rise in mu than comes, the friction-factor estimate drifts down, and the filter that
+    # smooths it lags the drift. The torque then crept into the 95 % band over 0.2-0.24 s (settled t95 0.206-0.237 s
+    # on the four noise seeds on the host this was written on; 0.179-0.193 s with half of the lag added back)
+    curve = {"friction.mu_slip_poly": [-2.2e-6, 3.2e-4, 0.024], "driveline.J_1": 0.0015, "driveline.J_p": 1.0,
+             "driveline.J_s": 7.5, "hydraulics.p_prestress": 0.8e5, "hydraulics.x_contact": 1.1e-3}
+    d = designs.cached(params_load(overrides=curve | {"driveline.ratio": 0.65}), "launch")
+    plant = params_load(overrides=curve | {"friction.mu_slope": mu_slope, "driveline.ratio": 0.5})
+    t95 = [launch.simulate(plant, d, launch.Conditions(t_ref=t_ref, oil_temp_C=oil_temp_C, seed=seed, t_max=2.45))
+           .summary["t95_settled_s"] for seed in range(1, 5)]
+    assert max(t95) < metrics.REQ_T95_S, t95

@@ -65,9 +65,13 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       0.2 s, so the controller also estimates a friction factor ``theta`` (the
       measured ``T_r`` over the nominal model's torque at the measured pressure,
       low-pass filtered) and scales its friction law by it: an adaptive
-      feedforward. While the clutch output swings back (a heavy one at a low CVT
-      ratio rings against the axle at a few Hz), that filter slows down: following
-      the axle torque's swing, the estimate would keep the ringing up. An
+      feedforward. Where the clutch's ``mu(slip)`` is flatter or steeper than
+      the design's, the factor drifts as the slip falls, and the filter lags
+      the drift by its rate times the filter's time constant; half of that lag
+      is added back from the estimate's own filtered rate. While the clutch
+      output swings back (a heavy one at a low CVT ratio rings against the axle
+      at a few Hz), that filter slows down and less of its lag is added back:
+      following the axle torque's swing, the estimate would keep the ringing up. An
       integrator on the torque error removes what is left (efficiency,
       kiss-point error). The slip in ``mu(slip)`` comes from the primary and
       secondary flywheels, whose speeds are smooth.
@@ -169,9 +173,10 @@ N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power 
 # --- controller state
 (CS_PHASE, CS_ZP, CS_ZT, CS_U, CS_REF, CS_PSET, CS_THETA, CS_K, CS_DIP, CS_PF, CS_FILLED, CS_DUMPED, CS_KISS,
  CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF, CS_THETA_START, CS_THETA_N, CS_THETA_LEARNT, CS_DPF,
- CS_PPREV, CS_TMIN, CS_REF1, CS_ANSWERED, CS_TREQ, CS_KISS_LEARNT, CS_W1PEAK, CS_W1DROP, CS_HIGH, CS_STROKE) = range(33)
+ CS_PPREV, CS_TMIN, CS_REF1, CS_ANSWERED, CS_TREQ, CS_KISS_LEARNT, CS_W1PEAK, CS_W1DROP, CS_HIGH, CS_STROKE, CS_DTHETA,
+ CS_THETA_PREV) = range(35)
 #: the fast-filtered pressure of the last N_RECENT samples (a ring from CS_RECENT on)
-CS_RECENT = 33
+CS_RECENT = 35
 N_RECENT = 16
 N_CS = CS_RECENT + N_RECENT
 #: time constant of the fast pressure filter (s)
@@ -200,6 +205,15 @@ W1_DROP_DEAD = 6.0
 W1_DROP_SCALE = 0.2
 W1_DROP_MAX = 3.0
 W1_DROP_TAU = 0.3
+#: share of the friction-factor estimate's lag behind a drift (its rate, low-passed with ``tau_theta``, times its
+#: time constant) that is added back, from THETA_TREND_N estimates on (the first ones converge from the assumed
+#: factor, and their rate is no drift), and less the more the clutch output swings back (none at W1_DROP_MAX's
+#: slowing: a ringing clutch output's rate is no drift either, and the lag added back is a lead at its resonance).
+#: On a clutch whose curve is half as steep as its design's, the response settled in 0.2-0.24 s with the whole
+#: lag, in 0.18-0.19 s with half of it added back. 0.8 of it made a clutch output 30 times the default's at a ratio
+#: of 0.41 ring beyond the ripple allowed (5.7 %); half keeps it within (4.9 %; 4.8 % with none).
+THETA_TREND_SHARE = 0.5
+THETA_TREND_N = 50
 #: samples of a calm, risen pressure (above ARM_P, rising less than ARM_RISE) before a steep rise counts as contact:
 #: the jump from empty to the reset spring's prestress at the start of the fill is not one; the stroke's ramp is calm
 ARM_N = 20
@@ -328,6 +342,13 @@ def _output_swing(cs, meas, dt):
 
 
 @_inline
+def _theta_slowing(cs):
+    """How many times ``tau_theta`` the friction-factor estimate's time constant is: more while the clutch output
+    swings back."""
+    return min(1.0 + W1_DROP_SCALE * max(cs[CS_W1DROP] - W1_DROP_DEAD, 0.0), W1_DROP_MAX)
+
+
+@_inline
 def _friction_estimate(ctrl, cs, meas, p, slip, dt):
     """Low-pass the friction factor: measured torque over the nominal model's at the measured pressure, once the
     plates press hard enough for the ratio to mean something."""
@@ -335,8 +356,10 @@ def _friction_estimate(ctrl, cs, meas, p, slip, dt):
     if f_n > ctrl[F_KNEE] * 1.5:
         t_model = ctrl[ETA] / _ratio(ctrl, meas) * _mu(ctrl, slip) * f_n * friction.knee(f_n, ctrl[F_KNEE])
         theta = min(max(meas[M_TR] / t_model, 0.5), 2.0)
-        slow = min(1.0 + W1_DROP_SCALE * max(cs[CS_W1DROP] - W1_DROP_DEAD, 0.0), W1_DROP_MAX)
-        cs[CS_THETA] += (theta - cs[CS_THETA]) * dt / (ctrl[TAU_THETA] * slow + dt)
+        cs[CS_THETA] += (theta - cs[CS_THETA]) * dt / (ctrl[TAU_THETA] * _theta_slowing(cs) + dt)
+        if cs[CS_THETA_N] > THETA_TREND_N:
+            cs[CS_DTHETA] += ((cs[CS_THETA] - cs[CS_THETA_PREV]) / dt - cs[CS_DTHETA]) * dt / (ctrl[TAU_THETA] + dt)
+        cs[CS_THETA_PREV] = cs[CS_THETA]
         cs[CS_THETA_N] += 1.0
         if cs[CS_THETA_N] <= THETA_LEARN_AT:
             cs[CS_THETA_LEARNT] = cs[CS_THETA]
@@ -379,6 +402,10 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     _output_swing(cs, meas, dt)
     _friction_estimate(ctrl, cs, meas, p, slip, dt)
     th = cs[CS_THETA]
+    if cs[CS_THETA_N] >= THETA_TREND_N:
+        slow = _theta_slowing(cs)
+        share = THETA_TREND_SHARE * (W1_DROP_MAX - slow) / (W1_DROP_MAX - 1.0)
+        th = min(max(th + share * cs[CS_DTHETA] * ctrl[TAU_THETA] * slow, 0.5), 2.0)
     p_r = _pressure_target(ctrl, cs[CS_KISS], r, slip, th, ratio)
     sens = _pressure_target(ctrl, cs[CS_KISS], r + 1.0, slip, th, ratio) - p_r  # Pa per N m
     p_set = p_r + cs[CS_ZT] + ctrl[KP_T] * sens * e_t

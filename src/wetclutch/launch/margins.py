@@ -14,16 +14,21 @@ Launch controller
     The feedforward asks for the pressure that the nominal friction law, scaled by the
     estimated friction factor ``theta``, says gives the request. Linearised about the
     operating point, in quantities relative to it (pressure above the kiss point ``q``, axle
-    torque ``y``, friction factor ``x``): the estimate is ``x = (y - q) / (tau_theta s + 1)``
-    (measured torque over the model's at the measured pressure), the set point
+    torque ``y``, friction factor ``x``): the estimate is ``x = (y - q) F(s)`` (measured torque over
+    the model's at the measured pressure, low-passed, with a share ``c`` of its lag behind a drift
+    added back from its rate, :data:`~wetclutch.launch.controller.THETA_TREND_SHARE`),
+
+        F(s) = ((1 + c) tau_theta s + 1) / (tau_theta s + 1)^2,
+
+    the set point
     ``q_set = -x - ki_t y / s``, the pressure ``q = G_p q_set`` (``G_p = G / K``) and the axle
     torque ``y = G_dl q``. Broken at the set point, the loop is
 
-        L(s) = G_p(s) [ (G_dl(s) - 1) / (tau_theta s + 1) + ki_t G_dl(s) / s ]
+        L(s) = G_p(s) [ (G_dl(s) - 1) F(s) + ki_t G_dl(s) / s ]
 
     At low frequency ``G_dl = 1``: the estimate is open loop there and only the torque
     integrator acts. Near the driveline's resonance ``G_dl - 1`` is as large as its peak, and
-    a fast estimate (small ``tau_theta``) closes a loop through it: that is what makes a heavy
+    a fast estimate (small ``tau_theta``, or much of its lag added back) closes a loop through it: that is what makes a heavy
     clutch output oscillate. ``G_dl`` is the clutch output (CVT input) inertia seen through the
     ratio, ``J_a = J_1 / i^2``, on the axle spring and damper against the far heavier vehicle,
 
@@ -33,10 +38,12 @@ Launch controller
     initial slip (negative where ``mu`` falls with slip: a source of judder).
 
 The launch loop leaves out the estimate's limits (it waits for the plates to press, and its
-value is bounded), the pressure loop's own feedback and the sensors' filters; it is
-conservative there: a loop at the edge of its gain margin (about 1) rings but does not
-oscillate in the simulated launch, while one at a third of it oscillates through the whole
-slip phase (the tests show both).
+value is bounded; its slowing and its trend's fading while the clutch output swings back),
+the pressure loop's own feedback and the sensors' filters; it is conservative there: a
+loop at two thirds of its gain margin (the default design at ten times the default clutch
+output and a ratio of 0.4) rings but does not oscillate in the simulated launch, while one
+at under a third of it oscillates through the whole slip phase (the tests show both). Where
+a loop has several phase crossovers, the smallest gain margin is the one given.
 
 Over the corner plants of the ranges this says what a design guarantees where real clutches
 drift: the smallest margins and where they occur.
@@ -53,6 +60,7 @@ from ..errors import WetclutchError
 from ..params import Params
 from ..physics import friction
 from . import ranges as ranges_mod
+from .controller import THETA_TREND_SHARE
 from .design import Design, fill_times, torque_step
 
 
@@ -140,10 +148,15 @@ def launch_margins(design: Design, plant: Params, temp_C: float, t_ref: float,
     wn = float(np.sqrt(k / j_a))
     zeta = c / (2.0 * np.sqrt(k * j_a))
     one = control.tf([1.0], [1.0])
-    loop = g_p * ((g_dl - one) * control.tf([1.0], [s["tau_theta"], 1.0]) + control.tf([s["ki_t"]], [1.0, 0.0]) * g_dl)
+    tau_e = s["tau_theta"]
+    estimate = control.tf([(1.0 + THETA_TREND_SHARE) * tau_e, 1.0], [tau_e**2, 2.0 * tau_e, 1.0])
+    loop = g_p * ((g_dl - one) * estimate + control.tf([s["ki_t"]], [1.0, 0.0]) * g_dl)
     if zeta <= 0.0:
         return LaunchMargins(0.0, -180.0, wn / (2 * np.pi), zeta, tau, theta)
-    gm, pm, *_ = control.stability_margins(loop)
+    # the smallest margin over every phase crossover: the lead of the estimate's trend gives the loop more than one
+    gms = control.stability_margins(loop, returnall=True)[0]
+    gm = float(np.min(gms)) if len(gms) else np.inf
+    _, pm, *_ = control.stability_margins(loop)
     return LaunchMargins(_finite(gm), _finite(pm), wn / (2 * np.pi), zeta, tau, theta)
 
 
