@@ -209,8 +209,8 @@ W1_DROP_TAU = 0.3
 #: time constant) that is added back, from THETA_TREND_N estimates on (the first ones converge from the assumed
 #: factor, and their rate is no drift), and less the more the clutch output swings back (none at W1_DROP_MAX's
 #: slowing: a ringing clutch output's rate is no drift either, and the lag added back is a lead at its resonance).
-#: On a clutch whose curve is half as steep as its design's, the response settled in 0.2-0.24 s with the whole
-#: lag, in 0.18-0.19 s with half of it added back. 0.8 of it made a clutch output 30 times the default's at a ratio
+#: On a clutch whose curve is half as steep as its design's, the response settled in 0.2-0.24 s with none of the
+#: lag added back, in 0.18-0.19 s with half. 0.8 of it made a clutch output 30 times the default's at a ratio
 #: of 0.41 ring beyond the ripple allowed (5.7 %); half keeps it within (4.9 %; 4.8 % with none).
 THETA_TREND_SHARE = 0.5
 THETA_TREND_N = 50

@@ -28,9 +28,10 @@ Launch controller
 
     At low frequency ``G_dl = 1``: the estimate is open loop there and only the torque
     integrator acts. Near the driveline's resonance ``G_dl - 1`` is as large as its peak, and
-    a fast estimate (small ``tau_theta``, or much of its lag added back) closes a loop through it: that is what makes a heavy
-    clutch output oscillate. ``G_dl`` is the clutch output (CVT input) inertia seen through the
-    ratio, ``J_a = J_1 / i^2``, on the axle spring and damper against the far heavier vehicle,
+    a fast estimate (small ``tau_theta``, or much of its lag added back) closes a loop through
+    it: that is what makes a heavy clutch output oscillate. ``G_dl`` is the clutch output (CVT
+    input) inertia seen through the ratio, ``J_a = J_1 / i^2``, on the axle spring and damper
+    against the far heavier vehicle,
 
         G_dl(s) = (d_a s + k_a) / (J_a s^2 + (d_a + c_f) s + k_a),    c_f = F_n mu'(slip) / i^2
 
@@ -40,10 +41,10 @@ Launch controller
 The launch loop leaves out the estimate's limits (it waits for the plates to press, and its
 value is bounded; its slowing and its trend's fading while the clutch output swings back),
 the pressure loop's own feedback and the sensors' filters; it is conservative there: a
-loop at two thirds of its gain margin (the default design at ten times the default clutch
-output and a ratio of 0.4) rings but does not oscillate in the simulated launch, while one
-at under a third of it oscillates through the whole slip phase (the tests show both). Where
-a loop has several phase crossovers, the smallest gain margin is the one given.
+loop with a gain margin of 0.68 (the default design at ten times the default clutch output
+and a ratio of 0.4) rings but does not oscillate in the simulated launch, while one with
+0.3 oscillates through the whole slip phase (the tests show both). Where a loop has several
+phase crossovers, the smallest gain margin is the one given.
 
 Over the corner plants of the ranges this says what a design guarantees where real clutches
 drift: the smallest margins and where they occur.
