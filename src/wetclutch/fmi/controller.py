@@ -34,12 +34,16 @@ class Controller:
     friction_factor
         The friction factor learnt in earlier launches at this oil temperature, if any: the torque loop's
         friction law starts from it instead of the design's.
+    friction_slope
+        The friction factor's slope with slip learnt there (1/(rad/s)), if any.
     """
 
-    def __init__(self, record: np.ndarray, kiss_Pa: float, friction_factor: float | None = None) -> None:
+    def __init__(self, record: np.ndarray, kiss_Pa: float, friction_factor: float | None = None,
+                 friction_slope: float | None = None) -> None:
         self.record = np.asarray(record, dtype=float)
         self.dt = float(self.record[control.DT])
-        self.state = control.initial_state(kiss_Pa, kiss_Pa != self.record[control.P_KISS], friction_factor)
+        self.state = control.initial_state(kiss_Pa, kiss_Pa != self.record[control.P_KISS], friction_factor,
+                                           friction_slope)
 
     @classmethod
     def of(cls, d: design.Design, dt: float = 1e-3) -> Controller:

@@ -1,4 +1,5 @@
-"""What the launch controller learns across launches: kiss point and friction factor per oil-temperature band.
+"""What the launch controller learns across launches: kiss point, friction factor and its slope with slip per
+oil-temperature band.
 
 Within a launch the controller finds the real kiss point (torque onset, or a search
 upward from where it believed it) and estimates the friction factor (the measured axle
@@ -7,7 +8,9 @@ launches, as production transmissions do, it keeps what it found in an adaptatio
 per band of :data:`BAND_C` of oil temperature, which the next launch at that temperature
 starts from: it then fills to the right place, so it neither slams nor creeps, and its
 feedforward asks for the right pressure from the start, so the torque loop has only
-the drift since the last launch to correct. The state is a small TOML file
+the drift since the last launch to correct. The friction factor's slope with slip (how
+the clutch's ``mu(slip)`` departs from the design's as the slip falls) moves the next
+launch's estimate with the slip, so that its low-pass does not lag that drift. The state is a small TOML file
 (``launch``/``verify --sequence``, ``--adaptation``).
 """
 
@@ -22,6 +25,7 @@ import tomli_w
 
 from ..errors import WetclutchError
 from ..params import OIL_TEMP_RANGE_C
+from .controller import FRICTION_SLOPE_MAX
 
 BAND_C = 20.0
 #: weight of a new finding against what was learnt (exponential forgetting: drift is followed, noise averaged)
@@ -43,11 +47,13 @@ def _blend(old: float | None, new: float) -> float:
 
 @dataclass(frozen=True)
 class Adaptation:
-    """Learnt kiss points (Pa), friction factors (-) and the number of launches behind each, by temperature band."""
+    """Learnt kiss points (Pa), friction factors (-), their slopes with slip (1/(rad/s)) and the number of launches
+    behind each, by temperature band."""
 
     kiss_Pa: dict[int, float] = field(default_factory=dict)
     launches: dict[int, int] = field(default_factory=dict)
     friction: dict[int, float] = field(default_factory=dict)
+    slope: dict[int, float] = field(default_factory=dict)
 
     def kiss(self, temp_C: float) -> float | None:
         """The learnt kiss point at ``temp_C``, or None if nothing was learnt in its band."""
@@ -57,20 +63,28 @@ class Adaptation:
         """The learnt friction factor at ``temp_C``, or None if nothing was learnt in its band."""
         return self.friction.get(band(temp_C))
 
-    def learn(self, temp_C: float, found_Pa: float, friction: float | None = None) -> Adaptation:
+    def friction_slope(self, temp_C: float) -> float | None:
+        """The learnt slope of the friction factor with slip at ``temp_C`` (1/(rad/s)), or None."""
+        return self.slope.get(band(temp_C))
+
+    def learn(self, temp_C: float, found_Pa: float, friction: float | None = None,
+              slope: float | None = None) -> Adaptation:
         """The state after a launch at ``temp_C`` that found the kiss point at ``found_Pa`` and, if it slipped long
-        enough to measure it, the friction factor ``friction``."""
+        enough to measure them, the friction factor ``friction`` and its slope with slip ``slope``."""
         b = band(temp_C)
         learnt = self.friction if friction is None else self.friction | {b: _blend(self.friction.get(b), friction)}
+        slopes = self.slope if slope is None else self.slope | {b: _blend(self.slope.get(b), slope)}
         return Adaptation(self.kiss_Pa | {b: _blend(self.kiss_Pa.get(b), found_Pa)},
-                          self.launches | {b: self.launches.get(b, 0) + 1}, learnt)
+                          self.launches | {b: self.launches.get(b, 0) + 1}, learnt, slopes)
 
     def to_toml(self) -> str:
         bands = [{"from_C": OIL_TEMP_RANGE_C[0] + b * BAND_C, "to_C": OIL_TEMP_RANGE_C[0] + (b + 1) * BAND_C,
                   "kiss_Pa": v, "launches": self.launches.get(b, 0)}
                  | ({"friction_factor": self.friction[b]} if b in self.friction else {})
+                 | ({"friction_slope_per_rad_s": self.slope[b]} if b in self.slope else {})
                  for b, v in sorted(self.kiss_Pa.items())]
-        return ("# wetclutch adaptation state per oil-temperature band: kiss point (Pa), friction factor (-)\n"
+        return ("# wetclutch adaptation state per oil-temperature band: kiss point (Pa), friction factor (-), its slope "
+                "with slip (1/(rad/s))\n"
                 + tomli_w.dumps({"band_C": BAND_C, "band": bands}))
 
 
@@ -82,7 +96,7 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
         raise WetclutchError(f"{source}: not valid TOML: {str(e).splitlines()[0]}") from None
     if data.get("band_C") != BAND_C:
         raise WetclutchError(f"{source}: band_C must be {BAND_C:g} (got {data.get('band_C')!r})")
-    kiss, count, fric = {}, {}, {}
+    kiss, count, fric, slopes = {}, {}, {}, {}
     rows = data.get("band", [])
     if not isinstance(rows, list):
         raise WetclutchError(f"{source}: band must be an array of tables")
@@ -107,7 +121,14 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
                 raise WetclutchError(f"{where}.friction_factor: must be a number in {FRICTION_RANGE[0]:g}.."
                                      f"{FRICTION_RANGE[1]:g} (got {f!r})")
             fric[b] = float(f)
-    return Adaptation(kiss, count, fric)
+        if "friction_slope_per_rad_s" in row:
+            g = row["friction_slope_per_rad_s"]
+            if (isinstance(g, bool) or not isinstance(g, (int, float))
+                    or not -FRICTION_SLOPE_MAX <= g <= FRICTION_SLOPE_MAX):
+                raise WetclutchError(f"{where}.friction_slope_per_rad_s: must be a number in {-FRICTION_SLOPE_MAX:g}.."
+                                     f"{FRICTION_SLOPE_MAX:g} (got {g!r})")
+            slopes[b] = float(g)
+    return Adaptation(kiss, count, fric, slopes)
 
 
 def load(path: str | Path) -> Adaptation:

@@ -304,7 +304,8 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     learnt = adaptation or Adaptation()
     start = learnt.kiss(temp) if d.kind == "launch" else None
     cs = control.initial_state(d.settings["p_kiss"] if start is None else start, start is not None,
-                               learnt.friction_factor(temp) if d.kind == "launch" else None)
+                               learnt.friction_factor(temp) if d.kind == "launch" else None,
+                               learnt.friction_slope(temp) if d.kind == "launch" else None)
     t_after = cond.t_after + (cond.hold_time if cond.post_sync_hold else 0.0)
     coldstart.begin(net, ext, ws)
     zf, lock, m = np.zeros((N_CH, 2)), np.full(1, -1.0), 0
@@ -357,8 +358,11 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     if cond.post_sync_hold:
         signals["ratio"] = tr.ratio("cvt")
         summary.update(ratio_hold.summary(tr.t, truth["T_r"], t_ref[:m], signals["ratio"], t_sync, hs))
+    slope = float(cs[control.CS_SLOPE_FOUND]) if d.kind == "launch" and np.isfinite(cs[control.CS_SLOPE_FOUND]) else None
+    summary.update(friction_slope_start=learnt.friction_slope(temp) if d.kind == "launch" else None,
+                   friction_slope_found=slope)
     if found is not None:
-        learnt = learnt.learn(temp, found, friction)
+        learnt = learnt.learn(temp, found, friction, slope)
     return LaunchResult(signals, truth, summary, cond, d.kind, tr.stats, found, learnt)
 
 
