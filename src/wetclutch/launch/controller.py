@@ -222,7 +222,7 @@ THETA_TREND_N = 50
 #: moves its estimate with the slip by it, so that the low-pass has only what the slope does not explain to follow:
 #: it measures the drift of a clutch whose mu(slip) differs from the design's in the slip range of the response
 #: (its first 0.1 to 0.4 s). From 100 to 400 served five clutches unlike the built-in rig better than 50 to 300,
-#: 100 to 600 or 200 to 500 (400 samples, three launches: by up to 1.3 points).
+#: 100 to 600 or 200 to 500 (400 samples, three launches: by 0.3 to 1.6 points).
 SLOPE_FROM = 100
 SLOPE_TO = 400
 SLOPE_MIN_DS = 10.0
