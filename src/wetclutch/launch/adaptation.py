@@ -25,7 +25,7 @@ import tomli_w
 
 from ..errors import WetclutchError
 from ..params import OIL_TEMP_RANGE_C
-from .controller import FRICTION_SLOPE_MAX
+from .controller import FRICTION_SLOPE_MAX, THETA_MAX, THETA_MIN
 
 BAND_C = 20.0
 #: weight of a new finding against what was learnt (exponential forgetting: drift is followed, noise averaged)
@@ -37,8 +37,8 @@ def band(temp_C: float) -> int:
     return int((temp_C - OIL_TEMP_RANGE_C[0]) // BAND_C)
 
 
-#: the friction factor a learnt value may take (the controller's estimate is limited alike)
-FRICTION_RANGE = (0.5, 2.0)
+#: the friction factor a learnt value may take: what the controller's estimate may
+FRICTION_RANGE = (THETA_MIN, THETA_MAX)
 
 
 def _blend(old: float | None, new: float) -> float:
@@ -114,20 +114,13 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
             raise WetclutchError(f"{where}.launches: must be a whole number >= 0 (got {n!r})")
         b = band(lo + 0.5 * BAND_C)
         kiss[b], count[b] = float(v), n
-        if "friction_factor" in row:
-            f = row["friction_factor"]
-            if (isinstance(f, bool) or not isinstance(f, (int, float))
-                    or not FRICTION_RANGE[0] <= f <= FRICTION_RANGE[1]):
-                raise WetclutchError(f"{where}.friction_factor: must be a number in {FRICTION_RANGE[0]:g}.."
-                                     f"{FRICTION_RANGE[1]:g} (got {f!r})")
-            fric[b] = float(f)
-        if "friction_slope_per_rad_s" in row:
-            g = row["friction_slope_per_rad_s"]
-            if (isinstance(g, bool) or not isinstance(g, (int, float))
-                    or not -FRICTION_SLOPE_MAX <= g <= FRICTION_SLOPE_MAX):
-                raise WetclutchError(f"{where}.friction_slope_per_rad_s: must be a number in {-FRICTION_SLOPE_MAX:g}.."
-                                     f"{FRICTION_SLOPE_MAX:g} (got {g!r})")
-            slopes[b] = float(g)
+        for key, learnt, (low, high) in (("friction_factor", fric, FRICTION_RANGE),
+                                         ("friction_slope_per_rad_s", slopes, (-FRICTION_SLOPE_MAX, FRICTION_SLOPE_MAX))):
+            if key in row:
+                x = row[key]
+                if isinstance(x, bool) or not isinstance(x, (int, float)) or not low <= x <= high:
+                    raise WetclutchError(f"{where}.{key}: must be a number in {low:g}..{high:g} (got {x!r})")
+                learnt[b] = float(x)
     return Adaptation(kiss, count, fric, slopes)
 
 

@@ -194,6 +194,8 @@ PLATEAU_LATEST = 0.1
 #: time constant of the filtered derivative of the measured pressure (s): it passes the valve's own pressure
 #: oscillation (20 to 40 Hz) and smooths the sensor's noise
 TAU_DP = 0.002
+#: the friction factor the controller takes, measured or learnt: a clutch outside this is broken, not drifted
+THETA_MIN, THETA_MAX = 0.5, 2.0
 #: friction-factor estimates (samples) behind a value worth learning for the next launch, and the count at which
 #: the value is taken: early in the slip phase, at the slip at which the next launch's response is made
 THETA_LEARN_N = 50
@@ -368,7 +370,7 @@ def _friction_estimate(ctrl, cs, meas, p, slip, dt):
     f_n = friction.normal_force(p, cs[CS_KISS], ctrl[A_P])
     if f_n > ctrl[F_KNEE] * 1.5:
         t_model = ctrl[ETA] / _ratio(ctrl, meas) * _mu(ctrl, slip) * f_n * friction.knee(f_n, ctrl[F_KNEE])
-        theta = min(max(meas[M_TR] / t_model, 0.5), 2.0)
+        theta = min(max(meas[M_TR] / t_model, THETA_MIN), THETA_MAX)
         if cs[CS_THETA_N] > 0.0:
             # the learnt slope moves the estimate with the slip; the trend below sees only what it leaves
             shift = cs[CS_SLOPE] * (slip - cs[CS_SLIP_PREV])
@@ -430,7 +432,7 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     if cs[CS_THETA_N] >= THETA_TREND_N:
         slow = _theta_slowing(cs)
         share = THETA_TREND_SHARE * (W1_DROP_MAX - slow) / (W1_DROP_MAX - 1.0)
-        th = min(max(th + share * cs[CS_DTHETA] * ctrl[TAU_THETA] * slow, 0.5), 2.0)
+        th = min(max(th + share * cs[CS_DTHETA] * ctrl[TAU_THETA] * slow, THETA_MIN), THETA_MAX)
     p_r = _pressure_target(ctrl, cs[CS_KISS], r, slip, th, ratio)
     sens = _pressure_target(ctrl, cs[CS_KISS], r + 1.0, slip, th, ratio) - p_r  # Pa per N m
     p_set = p_r + cs[CS_ZT] + ctrl[KP_T] * sens * e_t
