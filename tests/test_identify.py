@@ -158,6 +158,8 @@ def test_inertias_are_identified_where_the_data_excite_them(tmp_path, overrides,
         assert getattr(res.identified.driveline, name) == getattr(params.Driveline(), name)
         assert res.sources()[f"driveline.{name}"][1].startswith("not excited by the data")
         assert res.as_json()["parameters"][f"driveline.{name}"] == "prior"
+    # the report tells the user what an inertia it could not identify means for the launch, and only then
+    assert (identify_report.J1_FROM_PRIOR in identify_report._report(res, [])) == ("J_1" in kept)
     # the ring-out frequency gives the axle stiffness through the identified inertias
     assert res.identified.driveline.k_a == pytest.approx(true.k_a, rel=0.03)
 

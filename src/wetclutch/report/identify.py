@@ -67,6 +67,16 @@ def measured_cell(value: float, se: float, digits: int) -> str:
     return f"{value:.{digits}f}" + (f" ± {se:.1g}" if np.isfinite(se) else "")
 
 
+#: what the report says when the clutch output's inertia comes from the prior
+J1_FROM_PRIOR = (
+    "The clutch output and CVT input inertia (`driveline.J_1`) is the prior's. These runs cannot show it: unless it "
+    "is heavy, the axle's damper makes its mode overdamped, and in the slip phase it takes a negligible share of the "
+    "clutch torque. It matters to a launch all the same: at CVT ratio `i` a heavier clutch output rings against the "
+    "axle at `f = sqrt(k_a i^2 / J_1) / (2 pi)`, and the launch controller's response slows and overshoots once that "
+    "falls to some 15 Hz or below. A verification on these parameters takes the prior's value (times the ranges' "
+    "spread); if the clutch output is heavier, set `driveline.J_1` (`--set`) for `verify` and `report`.")
+
+
 def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
     e = result.estimates
     lines = ["# Identification report", "", "## Files", "", "| file | experiment | config | input | oil temp [C] | duration [s] |",
@@ -104,6 +114,8 @@ def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
               "| parameter | source | reason |", "|---|---|---|"]
     sources = result.sources()
     lines += [f"| {p} | {status} | {why} |" for p, (status, why) in sources.items()]
+    if sources["driveline.J_1"][0] != "identified":
+        lines += ["", J1_FROM_PRIOR]
     lines += ["", "## Identified versus prior parameters", "", "| parameter | prior | identified | from |", "|---|---|---|---|"]
     origin = {p: PARAMS_FROM[p] if status == "identified" else "not identified (see above)"
               for p, (status, _) in sources.items()}
