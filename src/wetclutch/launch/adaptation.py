@@ -72,10 +72,12 @@ class Adaptation:
         """The state after a launch at ``temp_C`` that found the kiss point at ``found_Pa`` and, if it slipped long
         enough to measure them, the friction factor ``friction`` and its slope with slip ``slope``."""
         b = band(temp_C)
-        learnt = self.friction if friction is None else self.friction | {b: _blend(self.friction.get(b), friction)}
-        slopes = self.slope if slope is None else self.slope | {b: _blend(self.slope.get(b), slope)}
-        return Adaptation(self.kiss_Pa | {b: _blend(self.kiss_Pa.get(b), found_Pa)},
-                          self.launches | {b: self.launches.get(b, 0) + 1}, learnt, slopes)
+
+        def learnt(old: dict[int, float], new: float | None) -> dict[int, float]:
+            return old if new is None else old | {b: _blend(old.get(b), new)}
+
+        return Adaptation(learnt(self.kiss_Pa, found_Pa), self.launches | {b: self.launches.get(b, 0) + 1},
+                          learnt(self.friction, friction), learnt(self.slope, slope))
 
     def to_toml(self) -> str:
         bands = [{"from_C": OIL_TEMP_RANGE_C[0] + b * BAND_C, "to_C": OIL_TEMP_RANGE_C[0] + (b + 1) * BAND_C,

@@ -364,9 +364,9 @@ def _theta_slowing(cs):
 
 
 @_inline
-def _friction_estimate(ctrl, cs, meas, p, slip, dt):
+def _friction_estimate(ctrl, cs, meas, p, slip, dt, slow):
     """Low-pass the friction factor: measured torque over the nominal model's at the measured pressure, once the
-    plates press hard enough for the ratio to mean something."""
+    plates press hard enough for the ratio to mean something; ``slow``: :func:`_theta_slowing`."""
     f_n = friction.normal_force(p, cs[CS_KISS], ctrl[A_P])
     if f_n > ctrl[F_KNEE] * 1.5:
         t_model = ctrl[ETA] / _ratio(ctrl, meas) * _mu(ctrl, slip) * f_n * friction.knee(f_n, ctrl[F_KNEE])
@@ -377,7 +377,7 @@ def _friction_estimate(ctrl, cs, meas, p, slip, dt):
             cs[CS_THETA] += shift
             cs[CS_THETA_PREV] += shift
         cs[CS_SLIP_PREV] = slip
-        cs[CS_THETA] += (theta - cs[CS_THETA]) * dt / (ctrl[TAU_THETA] * _theta_slowing(cs) + dt)
+        cs[CS_THETA] += (theta - cs[CS_THETA]) * dt / (ctrl[TAU_THETA] * slow + dt)
         if cs[CS_THETA_N] == SLOPE_FROM:
             cs[CS_SLIP_A] = slip
             cs[CS_THETA_A] = cs[CS_THETA]
@@ -427,10 +427,10 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     ratio = _ratio(ctrl, meas)
     slip = meas[M_WP] - meas[M_WS] / ratio
     _output_swing(cs, meas, dt)
-    _friction_estimate(ctrl, cs, meas, p, slip, dt)
+    slow = _theta_slowing(cs)
+    _friction_estimate(ctrl, cs, meas, p, slip, dt, slow)
     th = cs[CS_THETA]
     if cs[CS_THETA_N] >= THETA_TREND_N:
-        slow = _theta_slowing(cs)
         share = THETA_TREND_SHARE * (W1_DROP_MAX - slow) / (W1_DROP_MAX - 1.0)
         th = min(max(th + share * cs[CS_DTHETA] * ctrl[TAU_THETA] * slow, THETA_MIN), THETA_MAX)
     p_r = _pressure_target(ctrl, cs[CS_KISS], r, slip, th, ratio)

@@ -154,10 +154,11 @@ def launch_margins(design: Design, plant: Params, temp_C: float, t_ref: float,
     loop = g_p * ((g_dl - one) * estimate + control.tf([s["ki_t"]], [1.0, 0.0]) * g_dl)
     if zeta <= 0.0:
         return LaunchMargins(0.0, -180.0, wn / (2 * np.pi), zeta, tau, theta)
-    # the smallest margin over every phase crossover: the lead of the estimate's trend gives the loop more than one
-    gms = control.stability_margins(loop, returnall=True)[0]
+    # the smallest gain margin over every phase crossover (the lead of the estimate's trend gives the loop more than
+    # one); the phase margin nearest zero over the gain crossovers, as python-control picks it
+    gms, pms, *_ = control.stability_margins(loop, returnall=True)
     gm = float(np.min(gms)) if len(gms) else np.inf
-    _, pm, *_ = control.stability_margins(loop)
+    pm = float(pms[np.argmin(np.abs(pms))]) if len(pms) else np.inf
     return LaunchMargins(_finite(gm), _finite(pm), wn / (2 * np.pi), zeta, tau, theta)
 
 
