@@ -190,6 +190,10 @@ def test_adaptation_state_round_trips_and_bad_files_name_the_field(tmp_path):
         adaptation.loads(a.to_toml().replace("friction_slope_per_rad_s = 0.002", "friction_slope_per_rad_s = 0.5"))
     with pytest.raises(WetclutchError, match=r"band\[0\].friction_slope_per_rad_s"):
         adaptation.loads(a.to_toml().replace("friction_slope_per_rad_s = 0.002", 'friction_slope_per_rad_s = "x"'))
+    with pytest.raises(WetclutchError, match=r"band\[0\].frictoin_factor: unknown field"):
+        adaptation.loads(a.to_toml().replace("friction_factor = 1.2", "frictoin_factor = 1.2"))
+    with pytest.raises(WetclutchError, match=r"bandC: unknown field"):
+        adaptation.loads("bandC = 20.0\n" + a.to_toml())
     bad = a.to_toml().replace("launches = 2", "launches = -2")
     with pytest.raises(WetclutchError, match=r"band\[0\].launches"):
         adaptation.loads(bad)

@@ -28,6 +28,8 @@ from ..params import OIL_TEMP_RANGE_C
 from .controller import FRICTION_SLOPE_MAX, THETA_MAX, THETA_MIN
 
 BAND_C = 20.0
+#: the fields of a band in the file (``to_C`` is written for the reader; the band is known by ``from_C``)
+BAND_FIELDS = ("from_C", "to_C", "kiss_Pa", "launches", "friction_factor", "friction_slope_per_rad_s")
 #: weight of a new finding against what was learnt (exponential forgetting: drift is followed, noise averaged)
 GAIN = 0.5
 
@@ -96,6 +98,9 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise WetclutchError(f"{source}: not valid TOML: {str(e).splitlines()[0]}") from None
+    unknown = sorted(set(data) - {"band_C", "band"})
+    if unknown:
+        raise WetclutchError(f"{source}: {unknown[0]}: unknown field")
     if data.get("band_C") != BAND_C:
         raise WetclutchError(f"{source}: band_C must be {BAND_C:g} (got {data.get('band_C')!r})")
     kiss, count, fric, slopes = {}, {}, {}, {}
@@ -106,6 +111,9 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
         where = f"{source}: band[{i}]"
         if not isinstance(row, dict):
             raise WetclutchError(f"{where}: must be a table")
+        unknown = sorted(set(row) - set(BAND_FIELDS))
+        if unknown:
+            raise WetclutchError(f"{where}.{unknown[0]}: unknown field")
         lo, v, n = row.get("from_C"), row.get("kiss_Pa"), row.get("launches", 1)
         for key, x in (("from_C", lo), ("kiss_Pa", v)):
             if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
