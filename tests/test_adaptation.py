@@ -178,8 +178,9 @@ def test_a_friction_level_off_the_design_is_learnt_and_the_next_launch_starts_fr
 
 
 def test_adaptation_state_round_trips_and_bad_files_name_the_field(tmp_path):
-    a = adaptation.Adaptation().learn(41.0, 0.9e5).learn(41.0, 1.0e5, 1.2, 0.002).learn(85.0, 0.7e5)
+    a = adaptation.Adaptation().learn(41.0, 0.9e5).learn(41.0, 1.0e5, 1.2, 0.002).learn(85.0, 0.7e5, inertia=0.02)
     assert a.kiss(45.0) == pytest.approx(0.95e5) and a.kiss(85.0) == 0.7e5 and a.kiss(10.0) is None
+    assert a.inertia == 0.02 and a.learn(41.0, 1e5, inertia=0.01).inertia == pytest.approx(0.015)
     assert a.friction_factor(45.0) == 1.2 and a.friction_factor(85.0) is None
     assert a.friction_slope(45.0) == 0.002 and a.friction_slope(85.0) is None
     back = adaptation.loads(a.to_toml())
@@ -192,6 +193,8 @@ def test_adaptation_state_round_trips_and_bad_files_name_the_field(tmp_path):
         adaptation.loads(a.to_toml().replace("friction_slope_per_rad_s = 0.002", 'friction_slope_per_rad_s = "x"'))
     with pytest.raises(WetclutchError, match=r"band\[0\].frictoin_factor: unknown field"):
         adaptation.loads(a.to_toml().replace("friction_factor = 1.2", "frictoin_factor = 1.2"))
+    with pytest.raises(WetclutchError, match=r"output_inertia_kg_m2: must be a number in 0\.\.1"):
+        adaptation.loads(a.to_toml().replace("output_inertia_kg_m2 = 0.02", "output_inertia_kg_m2 = -0.02"))
     with pytest.raises(WetclutchError, match=r"bandC: unknown field"):
         adaptation.loads("bandC = 20.0\n" + a.to_toml())
     bad = a.to_toml().replace("launches = 2", "launches = -2")
@@ -264,3 +267,27 @@ def test_the_friction_factors_slope_with_slip_is_learnt_and_speeds_the_next_laun
     assert flat[1].summary["friction_slope_start"] == pytest.approx(found[0.55])
     t95 = [r.summary["t95_settled_s"] for r in flat[1:]]
     assert max(t95) < metrics.REQ_T95_S, t95
+
+
+@pytest.mark.parametrize("j_1", [0.001, 0.01, 0.03])
+def test_a_launch_measures_the_clutch_output_inertia(j_1):
+    # the controller is designed on the defaults (J_1 = 0.001 kg m^2) and not told the clutch's. Its slip phase must
+    # show it: within 0.005 kg m^2 of the simulated plant's (the size of J_1 that changes a launch, see below)
+    plant = load(overrides={"driveline.J_1": j_1, "driveline.ratio": 0.45})
+    r = loop.simulate(plant, design.cached(Params(), "launch"), loop.Conditions(t_ref=60.0, oil_temp_C=60.0, seed=2))
+    assert r.summary["output_inertia_start_kg_m2"] == Params().driveline.J_1
+    assert r.summary["output_inertia_found_kg_m2"] == pytest.approx(j_1, abs=0.005)
+    assert r.adaptation.inertia == r.summary["output_inertia_found_kg_m2"]
+
+
+def test_a_heavy_clutch_output_launches_cleanly_once_its_inertia_is_learnt():
+    # a clutch output 20 times the design's at a low ratio rings against the axle at some 10 Hz,
+    # sqrt(k_a i^2 / J_1) / 2 pi. Taken for the clutch's torque, the axle torque's swing drives the friction-factor
+    # estimate and, through the feedforward, keeps the ring up; told apart by J_1 w_1', it does not
+    plant = load(overrides={"driveline.J_1": 0.02, "driveline.ratio": 0.45})
+    runs = loop.sequence(plant, design.cached(Params(), "launch"), loop.Conditions(t_ref=60.0, oil_temp_C=60.0, seed=2), 2)
+    first, second = (r.summary for r in runs)
+    assert second["output_inertia_start_kg_m2"] == first["output_inertia_found_kg_m2"]
+    assert second["all_pass"], second
+    assert second["t95_settled_s"] < first["t95_settled_s"] - 0.05
+    assert second["overshoot_pct"] < first["overshoot_pct"] / 2

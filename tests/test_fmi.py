@@ -160,7 +160,7 @@ def test_export_bad_input_is_one_line_and_writes_nothing(tmp_path, cli_refuses):
 def test_the_controller_started_from_a_learnt_kiss_point_acts_as_the_native_loop_does():
     # a clutch whose kiss point lies 0.1 bar above the design's, in cold oil: the second launch starts from the kiss
     # point the first one learnt. Fed the second launch's measurements, the exported controller (started from that
-    # kiss point, friction factor and its slope with slip) must give the native loop's input at every sample, the
+    # kiss point, friction factor, its slope with slip and the output inertia) must give the native loop's input at every sample, the
     # search of a learnt kiss point included
     from wetclutch.fmi.controller import Controller
     from wetclutch.launch import design, loop
@@ -172,7 +172,7 @@ def test_the_controller_started_from_a_learnt_kiss_point_acts_as_the_native_loop
     learnt = runs[1].summary["kiss_start_Pa"]
     assert learnt != d.settings["p_kiss"]
     ctrl = Controller(design.record(d, DT), learnt, runs[1].summary["friction_factor_start"],
-                      runs[1].summary["friction_slope_start"])
+                      runs[1].summary["friction_slope_start"], runs[1].summary["output_inertia_start_kg_m2"])
     sg = runs[1].signals
     u = [ctrl.step(dict(zip(MEASURED, row)), r) for row, r in zip(sg[list(MEASURED)].to_numpy(), sg["t_ref"])]
     assert np.array_equal(np.array(u), sg["u"].to_numpy())

@@ -36,14 +36,16 @@ class Controller:
         friction law starts from it instead of the design's.
     friction_slope
         The friction factor's slope with slip learnt there (1/(rad/s)), if any.
+    output_inertia
+        The clutch output's inertia measured in earlier launches (kg m^2), if any (else the design's).
     """
 
     def __init__(self, record: np.ndarray, kiss_Pa: float, friction_factor: float | None = None,
-                 friction_slope: float | None = None) -> None:
+                 friction_slope: float | None = None, output_inertia: float | None = None) -> None:
         self.record = np.asarray(record, dtype=float)
         self.dt = float(self.record[control.DT])
         self.state = control.initial_state(kiss_Pa, kiss_Pa != self.record[control.P_KISS], friction_factor,
-                                           friction_slope)
+                                           friction_slope, output_inertia)
 
     @classmethod
     def of(cls, d: design.Design, dt: float = 1e-3) -> Controller:

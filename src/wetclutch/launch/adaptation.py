@@ -1,5 +1,5 @@
 """What the launch controller learns across launches: kiss point, friction factor and its slope with slip per
-oil-temperature band.
+oil-temperature band, and the clutch output's inertia.
 
 Within a launch the controller finds the real kiss point (torque onset, or a search
 upward from where it believed it) and estimates the friction factor (the measured axle
@@ -10,7 +10,9 @@ starts from: it then fills to the right place, so it neither slams nor creeps, a
 feedforward asks for the right pressure from the start, so the torque loop has only
 the drift since the last launch to correct. The friction factor's slope with slip (how
 the clutch's ``mu(slip)`` departs from the design's as the slip falls) moves the next
-launch's estimate with the slip, so that its low-pass does not lag that drift. The state is a small TOML file
+launch's estimate with the slip, so that its low-pass does not lag that drift. The clutch output's inertia, which
+the friction-factor estimate needs to tell the clutch's torque from the axle's, is measured in the slip phase and
+taken by the next launch at any temperature. The state is a small TOML file
 (``launch``/``verify --sequence``, ``--adaptation``).
 """
 
@@ -25,7 +27,7 @@ import tomli_w
 
 from ..errors import WetclutchError
 from ..params import OIL_TEMP_RANGE_C
-from .controller import FRICTION_SLOPE_MAX, THETA_MAX, THETA_MIN
+from .controller import FRICTION_SLOPE_MAX, J1_MAX, THETA_MAX, THETA_MIN
 
 BAND_C = 20.0
 #: the fields of a band in the file (``to_C`` is written for the reader; the band is known by ``from_C``)
@@ -56,6 +58,8 @@ class Adaptation:
     launches: dict[int, int] = field(default_factory=dict)
     friction: dict[int, float] = field(default_factory=dict)
     slope: dict[int, float] = field(default_factory=dict)
+    #: the clutch output's inertia (kg m^2), a property of the mechanics, not of the oil: one for all bands
+    inertia: float | None = None
 
     def kiss(self, temp_C: float) -> float | None:
         """The learnt kiss point at ``temp_C``, or None if nothing was learnt in its band."""
@@ -70,16 +74,18 @@ class Adaptation:
         return self.slope.get(band(temp_C))
 
     def learn(self, temp_C: float, found_Pa: float, friction: float | None = None,
-              slope: float | None = None) -> Adaptation:
+              slope: float | None = None, inertia: float | None = None) -> Adaptation:
         """The state after a launch at ``temp_C`` that found the kiss point at ``found_Pa`` and, if it slipped long
-        enough to measure them, the friction factor ``friction`` and its slope with slip ``slope``."""
+        enough to measure them, the friction factor ``friction``, its slope with slip ``slope`` and the clutch
+        output's inertia ``inertia``."""
         b = band(temp_C)
 
         def learnt(old: dict[int, float], new: float | None) -> dict[int, float]:
             return old if new is None else old | {b: _blend(old.get(b), new)}
 
         return Adaptation(learnt(self.kiss_Pa, found_Pa), self.launches | {b: self.launches.get(b, 0) + 1},
-                          learnt(self.friction, friction), learnt(self.slope, slope))
+                          learnt(self.friction, friction), learnt(self.slope, slope),
+                          self.inertia if inertia is None else _blend(self.inertia, inertia))
 
     def to_toml(self) -> str:
         bands = [{"from_C": OIL_TEMP_RANGE_C[0] + b * BAND_C, "to_C": OIL_TEMP_RANGE_C[0] + (b + 1) * BAND_C,
@@ -87,9 +93,10 @@ class Adaptation:
                  | ({"friction_factor": self.friction[b]} if b in self.friction else {})
                  | ({"friction_slope_per_rad_s": self.slope[b]} if b in self.slope else {})
                  for b, v in sorted(self.kiss_Pa.items())]
-        return ("# wetclutch adaptation state per oil-temperature band: kiss point (Pa), friction factor (-), its slope "
-                "with slip (1/(rad/s))\n"
-                + tomli_w.dumps({"band_C": BAND_C, "band": bands}))
+        top = {"band_C": BAND_C} | ({"output_inertia_kg_m2": self.inertia} if self.inertia is not None else {})
+        return ("# wetclutch adaptation state: the clutch output's inertia (kg m^2); per oil-temperature band: kiss "
+                "point (Pa), friction factor (-), its slope with slip (1/(rad/s))\n"
+                + tomli_w.dumps(top | {"band": bands}))
 
 
 def loads(text: str, source: str = "adaptation file") -> Adaptation:
@@ -98,11 +105,15 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise WetclutchError(f"{source}: not valid TOML: {str(e).splitlines()[0]}") from None
-    unknown = sorted(set(data) - {"band_C", "band"})
+    unknown = sorted(set(data) - {"band_C", "band", "output_inertia_kg_m2"})
     if unknown:
         raise WetclutchError(f"{source}: {unknown[0]}: unknown field")
     if data.get("band_C") != BAND_C:
         raise WetclutchError(f"{source}: band_C must be {BAND_C:g} (got {data.get('band_C')!r})")
+    inertia = data.get("output_inertia_kg_m2")
+    if inertia is not None and (isinstance(inertia, bool) or not isinstance(inertia, (int, float))
+                                or not 0.0 <= inertia <= J1_MAX):
+        raise WetclutchError(f"{source}: output_inertia_kg_m2: must be a number in 0..{J1_MAX:g} (got {inertia!r})")
     kiss, count, fric, slopes = {}, {}, {}, {}
     rows = data.get("band", [])
     if not isinstance(rows, list):
@@ -131,7 +142,7 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
                 if isinstance(x, bool) or not isinstance(x, (int, float)) or not low <= x <= high:
                     raise WetclutchError(f"{where}.{key}: must be a number in {low:g}..{high:g} (got {x!r})")
                 learnt[b] = float(x)
-    return Adaptation(kiss, count, fric, slopes)
+    return Adaptation(kiss, count, fric, slopes, None if inertia is None else float(inertia))
 
 
 def load(path: str | Path) -> Adaptation:

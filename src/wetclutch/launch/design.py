@@ -85,6 +85,7 @@ PLANT_SETTINGS = {
     "mu0": Setting("m", 1e-6, 10.0, "friction law mu(slip): constant"),
     "valve_play": Setting("V", 0.0, 5.0, "the magnet's hysteresis play as input voltage, I_hyst / g_current"),
     "stroke_span": Setting("Pa", 0.0, 5e6, "pressure rise over the piston's stroke, from the prestress to the kiss point"),
+    "j_1": Setting("kg m^2", 0.0, 1.0, "clutch output inertia the friction-factor estimate starts from (a launch measures it)"),
 }
 #: every setting of each controller kind
 SETTINGS: dict[str, dict[str, Setting]] = {
@@ -344,6 +345,7 @@ def plant_settings(plant: Params, origin: dict[str, str] | None = None) -> dict[
                         f"plant ({_origin(origin, 'hydraulics.k_reset', 'hydraulics.x_contact', 'hydraulics.A_p')}): "
                         "k_reset x_contact / A_p"),
     }
+    plant_values["j_1"] = (d.J_1, f"plant ({_origin(origin, 'driveline.J_1')}): driveline.J_1")
     mu_src = (f"plant ({_origin(origin, 'friction.mu_slip_poly', 'friction.mu_scale', 'friction.mu_slope')}): "
               "mu_slip_poly x mu_scale, turned by mu_slope")
     for name, value in zip(("mu2", "mu1", "mu0"), mu):
