@@ -280,14 +280,15 @@ def test_a_launch_measures_the_clutch_output_inertia(j_1):
     assert r.adaptation.inertia == r.summary["output_inertia_found_kg_m2"]
 
 
-def test_a_heavy_clutch_output_launches_cleanly_once_its_inertia_is_learnt():
+def test_a_heavy_clutch_output_launches_cleanly_first_time_and_after():
     # a clutch output 20 times the design's at a low ratio rings against the axle at some 10 Hz,
-    # sqrt(k_a i^2 / J_1) / 2 pi. Taken for the clutch's torque, the axle torque's swing drives the friction-factor
-    # estimate and, through the feedforward, keeps the ring up; told apart by J_1 w_1', it does not
+    # sqrt(k_a i^2 / J_1) / 2 pi. Taken for the clutch's torque, the axle torque's swing drove the friction-factor
+    # estimate and, through the feedforward, kept the ring up (settled t95 0.31 s, overshoot 10 %, on every launch).
+    # Told apart by J_1 w_1' (the first launch from its first 80 ms of slip on, the next from the start), it does not
     plant = load(overrides={"driveline.J_1": 0.02, "driveline.ratio": 0.45})
     runs = loop.sequence(plant, design.cached(Params(), "launch"), loop.Conditions(t_ref=60.0, oil_temp_C=60.0, seed=2), 2)
     first, second = (r.summary for r in runs)
     assert second["output_inertia_start_kg_m2"] == first["output_inertia_found_kg_m2"]
-    assert second["all_pass"], second
-    assert second["t95_settled_s"] < first["t95_settled_s"] - 0.05
-    assert second["overshoot_pct"] < first["overshoot_pct"] / 2
+    for s in (first, second):
+        assert s["all_pass"], s
+        assert s["t95_settled_s"] < metrics.REQ_T95_S - 0.03 and s["overshoot_pct"] < 5.0, s

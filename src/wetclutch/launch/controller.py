@@ -242,6 +242,14 @@ THETA_TREND_N = 50
 TAU_W1_RATE = 0.005
 EST_TAU = 0.015
 EST_N = 400
+#: Within the launch, the fit of its first EST_EARLY_N samples replaces the ``J_1`` taken where it shows one at least
+#: EST_EARLY_FACTOR times as heavy and above EST_EARLY_MIN kg m^2 (the shorter fit is the noisier, and a light
+#: output's estimate needs no correction: ``J_1`` overestimated a few times over changed the default rig's launches
+#: by less than their noise). On the default rig with a clutch output of 3 to 30 times the default's (the shipped
+#: ranges around 0.003 kg m^2), 300 samples: first launches 86.7 -> 91.0 %, with the default's unchanged (98.0 %).
+EST_EARLY_N = 80
+EST_EARLY_FACTOR = 2.0
+EST_EARLY_MIN = 0.004
 #: the least a fit's ``w_1'`` must vary (its sum of squares over the window, (rad/s^2)^2 s) for its ``J_1`` to count
 EST_MIN_EXCITATION = 1.0
 J1_MAX = 1.0
@@ -398,6 +406,20 @@ def _lowpass2(cs, i, x, a):
     return cs[i + 1]
 
 
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _inertia_fit(cs):
+    """``J_1`` of the output-inertia fit's sums so far (the middle unknown of the 3 x 3 normal equations, by
+    Cramer's rule), or NaN where the output's acceleration is too small to show it or the equations are singular."""
+    q = CS_EST_S
+    a11, a12, a13, a22, a23, a33 = cs[q], cs[q + 1], cs[q + 2], cs[q + 3], cs[q + 4], cs[q + 5]
+    b1, b2, b3 = cs[q + 6], cs[q + 7], cs[q + 8]
+    det = a11 * (a22 * a33 - a23 * a23) - a12 * (a12 * a33 - a23 * a13) + a13 * (a12 * a23 - a22 * a13)
+    scale = a11 * a22 * a33
+    if a22 < EST_MIN_EXCITATION or not abs(det) > 1e-12 * abs(scale):
+        return np.nan
+    return (a11 * (b2 * a33 - a23 * b3) - b1 * (a12 * a33 - a23 * a13) + a13 * (a12 * b3 - b2 * a13)) / det
+
+
 @_inline
 def _output_rate(ctrl, cs, meas, p, slip, dt):
     """The clutch output's measured acceleration (low-passed) for the estimate, and the output-inertia fit's sums
@@ -422,6 +444,10 @@ def _output_rate(ctrl, cs, meas, p, slip, dt):
         for u, v in ((x1, x1), (x1, x2), (x1, x3), (x2, x2), (x2, x3), (x3, x3), (x1, y), (x2, y), (x3, y)):
             cs[k] += u * v * dt
             k += 1
+        if cs[CS_EST_N] == EST_EARLY_N:
+            j = _inertia_fit(cs)
+            if j > EST_EARLY_FACTOR * cs[CS_J1] and j > EST_EARLY_MIN:
+                cs[CS_J1] = j
 
 
 @_inline
@@ -835,12 +861,8 @@ def output_inertia(cs: np.ndarray) -> float | None:
     full or the output's acceleration too small to show it."""
     if cs[CS_EST_N] < EST_N:
         return None
-    s = cs[CS_EST_S:CS_EST_S + N_EST_S]
-    a = np.array([[s[0], s[1], s[2]], [s[1], s[3], s[4]], [s[2], s[4], s[5]]])
-    if s[3] < EST_MIN_EXCITATION or np.linalg.cond(a) > 1e12:
-        return None
-    j1 = float(np.linalg.solve(a, s[6:9])[1])
-    return min(max(j1, 0.0), J1_MAX)
+    j1 = _inertia_fit(cs)
+    return None if np.isnan(j1) else min(max(j1, 0.0), J1_MAX)
 
 
 def pack(kind: str, s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pressures: np.ndarray, table: np.ndarray,

@@ -14,7 +14,7 @@ Launch controller
     The feedforward asks for the pressure that the nominal friction law, scaled by the
     estimated friction factor ``theta``, says gives the request. Linearised about the
     operating point, in quantities relative to it (pressure above the kiss point ``q``, axle
-    torque ``y``, friction factor ``x``): the estimate is ``x = (y - q) F(s)`` (measured torque over
+    torque ``y``, friction factor ``x``): the estimate is ``x = (m - q) F(s)`` (measured torque over
     the model's at the measured pressure, low-passed, with a share ``c`` of its lag behind a drift
     added back from its rate, :data:`~wetclutch.launch.controller.THETA_TREND_SHARE`),
 
@@ -22,14 +22,19 @@ Launch controller
 
     the set point
     ``q_set = -x - ki_t y / s``, the pressure ``q = G_p q_set`` (``G_p = G / K``) and the axle
-    torque ``y = G_dl q``. Broken at the set point, the loop is
+    torque ``y = G_dl q``. The measured torque ``m`` is the clutch's as the estimate sees it: the axle's
+    plus the clutch output's share ``J_1 w_1'`` with the ``J_1`` it takes, ``J_e``, its rate low-passed
+    (time constant ``tau_w``, :data:`~wetclutch.launch.controller.TAU_W1_RATE`):
+    ``m = G_m q``, ``G_m = G_dl + (J_e / J_1) (1 - G_dl) / (tau_w s + 1)``. Broken at the set point, the loop is
 
-        L(s) = G_p(s) [ (G_dl(s) - 1) F(s) + ki_t G_dl(s) / s ]
+        L(s) = G_p(s) [ (G_m(s) - 1) F(s) + ki_t G_dl(s) / s ]
 
     At low frequency ``G_dl = 1``: the estimate is open loop there and only the torque
     integrator acts. Near the driveline's resonance ``G_dl - 1`` is as large as its peak, and
     a fast estimate (small ``tau_theta``, or much of its lag added back) closes a loop through
-    it: that is what makes a heavy clutch output oscillate. ``G_dl`` is the clutch output (CVT
+    it unless the estimate's ``J_e`` takes it out: that is what made a heavy clutch output oscillate.
+    ``J_e`` is the design's, or the clutch's own where the launch measures it within
+    (:func:`estimate_inertia`). ``G_dl`` is the clutch output (CVT
     input) inertia seen through the ratio, ``J_a = J_1 / i^2``, on the axle spring and damper
     against the far heavier vehicle,
 
@@ -40,11 +45,12 @@ Launch controller
 
 The launch loop leaves out the estimate's limits (it waits for the plates to press, and its
 value is bounded; its slowing and its trend's fading while the clutch output swings back),
-the pressure loop's own feedback and the sensors' filters; it is conservative there: a
-loop with a gain margin of 0.68 (the default design at ten times the default clutch output
-and a ratio of 0.4) rings but does not oscillate in the simulated launch, while one with
-0.3 oscillates through the whole slip phase (the tests show both). Where a loop has several
-phase crossovers, the smallest gain margin is the one given.
+the pressure loop's own feedback and the sensors' filters; it is conservative there. At ten
+times the default clutch output and a ratio of 0.4, with a fast estimate (``tau_theta`` 5 ms):
+told the output's whole inertia, a gain margin of 1.0 and a simulated launch that does not
+oscillate; told 60 % of it, 0.63 and an oscillation through the whole slip phase; the default
+design (50 ms) has 1.9 (the tests show these). Where a loop has several phase crossovers, the
+smallest gain margin is the one given.
 
 Over the corner plants of the ranges this says what a design guarantees where real clutches
 drift: the smallest margins and where they occur.
@@ -61,7 +67,7 @@ from ..errors import WetclutchError
 from ..params import Params
 from ..physics import friction
 from . import ranges as ranges_mod
-from .controller import THETA_TREND_SHARE
+from .controller import EST_EARLY_FACTOR, EST_EARLY_MIN, TAU_W1_RATE, THETA_TREND_SHARE
 from .design import Design, fill_times, torque_step
 
 
@@ -126,6 +132,13 @@ class LaunchMargins:
     theta_s: float
 
 
+def estimate_inertia(design_j_1: float, j_1: float) -> float:
+    """The clutch output inertia (kg m^2) a launch's friction-factor estimate takes through its response, on a clutch
+    output ``j_1`` and a design's ``design_j_1``: the design's, or ``j_1`` where the launch measures it within
+    (one heavy enough, :data:`~wetclutch.launch.controller.EST_EARLY_N`)."""
+    return j_1 if j_1 > max(EST_EARLY_FACTOR * design_j_1, EST_EARLY_MIN) else design_j_1
+
+
 def _valve_step(design: Design, plant: Params, temp_C: float, fill: np.ndarray) -> tuple[float, float]:
     """``(tau, theta)`` of the pressure path: the step of :func:`torque_step` after a timed fill (the launch design
     fills by pressure, not by time; the baseline's fill times of the design plant stand in)."""
@@ -151,7 +164,11 @@ def launch_margins(design: Design, plant: Params, temp_C: float, t_ref: float,
     one = control.tf([1.0], [1.0])
     tau_e = s["tau_theta"]
     estimate = control.tf([(1.0 + THETA_TREND_SHARE) * tau_e, 1.0], [tau_e**2, 2.0 * tau_e, 1.0])
-    loop = g_p * ((g_dl - one) * estimate + control.tf([s["ki_t"]], [1.0, 0.0]) * g_dl)
+    # the estimate's torque is the axle's plus the clutch output's share, J_1 w_1' (its rate low-passed): the
+    # resonance's path into it shrinks by that share's part of the output's own
+    share = estimate_inertia(s["j_1"], plant.driveline.J_1) / plant.driveline.J_1
+    measured = g_dl + share * (one - g_dl) * control.tf([1.0], [TAU_W1_RATE, 1.0])
+    loop = g_p * ((measured - one) * estimate + control.tf([s["ki_t"]], [1.0, 0.0]) * g_dl)
     if zeta <= 0.0:
         return LaunchMargins(0.0, -180.0, wn / (2 * np.pi), zeta, tau, theta)
     # the smallest gain margin over every phase crossover (the lead of the estimate's trend gives the loop more than
