@@ -71,10 +71,11 @@ def measured_cell(value: float, se: float, digits: int) -> str:
 J1_FROM_PRIOR = (
     "The clutch output and CVT input inertia (`driveline.J_1`) is the prior's. These runs cannot show it: unless it "
     "is heavy, the axle's damper makes its mode overdamped, and in the slip phase it takes a negligible share of the "
-    "clutch torque. It matters to a launch all the same: at CVT ratio `i` a heavier clutch output rings against the "
-    "axle at `f = sqrt(k_a i^2 / J_1) / (2 pi)`, and the launch controller's response slows and overshoots once that "
-    "falls to some 15 Hz or below. A verification on these parameters takes the prior's value (times the ranges' "
-    "spread); if the clutch output is heavier, set `driveline.J_1` (`--set`) for `verify` and `report`.")
+    "clutch torque. In a launch it matters: at CVT ratio `i` a heavier clutch output rings against the axle at "
+    "`f = sqrt(k_a i^2 / J_1) / (2 pi)`. The launch controller measures it in the slip phase (a heavy one within its "
+    "first launch) and keeps it in its adaptation state. A verification on these parameters varies the prior's "
+    "value by the ranges' spread; if the clutch output is known to be heavier, set `driveline.J_1` (`--set`) for "
+    "`verify` and `report`.")
 
 
 def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
