@@ -32,7 +32,7 @@ Launch controller
     At low frequency ``G_dl = 1``: the estimate is open loop there and only the torque
     integrator acts. Near the driveline's resonance ``G_dl - 1`` is as large as its peak, and
     a fast estimate (small ``tau_theta``, or much of its lag added back) closes a loop through
-    it unless the estimate's ``J_e`` takes it out: that is what made a heavy clutch output oscillate.
+    it unless the estimate's ``J_e`` takes it out: that is what makes a heavy clutch output oscillate.
     ``J_e`` is the design's, or the clutch's own where the launch measures it within
     (:func:`estimate_inertia`). ``G_dl`` is the clutch output (CVT
     input) inertia seen through the ratio, ``J_a = J_1 / i^2``, on the axle spring and damper
