@@ -50,6 +50,18 @@ CLUTCHES = {
         "friction.mu_slip_poly": [-2.2e-6, 3.2e-4, 0.024], "hydraulics.p_prestress": 0.8e5,
         "hydraulics.x_contact": 1.1e-3, "driveline.ratio": 0.65, "driveline.J_1": 1.5e-3, "driveline.J_p": 1.0,
         "driveline.J_s": 7.5},
+    "friction falling steeply at high slip": {
+        "friction.mu_slip_poly": [-1.8e-6, 2.0e-4, 0.030], "friction.mu_scale": 0.92, "hydraulics.p_prestress": 0.45e5,
+        "hydraulics.x_contact": 1.25e-3, "driveline.ratio": 0.55, "driveline.J_1": 1.2e-3, "driveline.J_p": 1.1,
+        "driveline.J_s": 6.0},
+    "1.4 bar prestress, short stroke, heavy output": {
+        "friction.mu_scale": 0.95, "friction.mu_slope": 0.7, "hydraulics.p_prestress": 1.4e5,
+        "hydraulics.x_contact": 0.9e-3, "driveline.ratio": 0.8, "driveline.J_1": 3e-3, "driveline.J_p": 0.7,
+        "driveline.J_s": 4.0, "valve.d_stem": 45.0},
+    "stiff axle, short ratio": {
+        "friction.mu_scale": 1.1, "friction.mu_slope": 1.25, "hydraulics.p_prestress": 0.9e5,
+        "hydraulics.x_contact": 1.6e-3, "driveline.ratio": 0.42, "driveline.J_1": 0.8e-3, "driveline.J_p": 1.6,
+        "driveline.J_s": 8.0, "driveline.k_a": 600.0},
 }
 
 #: the rig runs of the chain: (name, experiment, settings)
