@@ -2,8 +2,8 @@
 oil-temperature band, and the clutch output's inertia.
 
 Within a launch the controller finds the real kiss point (torque onset, or a search
-upward from where it believed it) and estimates the friction factor (the measured axle
-torque over the nominal friction law's; :mod:`wetclutch.launch.controller`). Across
+upward from where it believed it) and estimates the friction factor (the clutch's
+torque, measured at the axle, over the nominal friction law's; :mod:`wetclutch.launch.controller`). Across
 launches, as production transmissions do, it keeps what it found in an adaptation state
 per band of :data:`BAND_C` of oil temperature, which the next launch at that temperature
 starts from: it then fills to the right place, so it neither slams nor creeps, and its

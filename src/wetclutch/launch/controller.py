@@ -429,21 +429,33 @@ def _inertia_fit(cs):
 
 
 @_inline
-def _output_rate(ctrl, cs, meas, p, slip, dt):
+def _rate(cs, i, x, tau, a):
+    """The rate of ``x`` low-passed once with ``tau`` (slot ``i`` holds ``x`` low-passed alike, factor ``a`` =
+    dt / (tau + dt)): ``(x - lp(x)) / tau``."""
+    cs[i] += (x - cs[i]) * a
+    return (x - cs[i]) / tau
+
+
+def inertia_taken(found, taken):
+    """The clutch output inertia the estimate goes on with after a launch's first :data:`EST_EARLY_N` samples have shown
+    ``found``, having taken ``taken``: ``found`` if it is at least :data:`EST_EARLY_FACTOR` times as heavy and above
+    :data:`EST_EARLY_MIN`, else ``taken``."""
+    return found if found > EST_EARLY_FACTOR * taken and found > EST_EARLY_MIN else taken
+
+
+_inertia_taken = _inline(inertia_taken)
+
+
+@_inline
+def _output_rate(ctrl, cs, meas, slip, ratio, f_n, mu, knee, dt):
     """The clutch output's measured acceleration (low-passed) for the estimate, and the output-inertia fit's sums
-    over the first :data:`EST_N` samples the plates press hard enough for it."""
-    if cs[CS_J1] < 0.0:
-        cs[CS_J1] = ctrl[J_1]
-    a = dt / (TAU_W1_RATE + dt)
-    cs[CS_W1F] += (meas[M_W1] - cs[CS_W1F]) * a
-    cs[CS_DW1] = (meas[M_W1] - cs[CS_W1F]) / TAU_W1_RATE
-    f_n = friction.normal_force(p, cs[CS_KISS], ctrl[A_P])
+    over the first :data:`EST_N` samples the plates press hard enough for it (``f_n``, ``mu`` and ``knee``: the
+    friction law's normal force, coefficient and knee share at the measured pressure and slip)."""
+    cs[CS_DW1] = _rate(cs, CS_W1F, meas[M_W1], TAU_W1_RATE, dt / (TAU_W1_RATE + dt))
     a = dt / (EST_TAU + dt)
-    ratio = _ratio(ctrl, meas)
     y = _lowpass2(cs, CS_EST_F, meas[M_TR] * ratio / ctrl[ETA], a)
-    x1 = _lowpass2(cs, CS_EST_F + 2, _mu(ctrl, slip) * f_n * friction.knee(f_n, ctrl[F_KNEE]), a)
-    cs[CS_EST_F + 4] += (meas[M_W1] - cs[CS_EST_F + 4]) * a
-    cs[CS_EST_F + 5] += ((meas[M_W1] - cs[CS_EST_F + 4]) / EST_TAU - cs[CS_EST_F + 5]) * a
+    x1 = _lowpass2(cs, CS_EST_F + 2, mu * f_n * knee, a)
+    cs[CS_EST_F + 5] += (_rate(cs, CS_EST_F + 4, meas[M_W1], EST_TAU, a) - cs[CS_EST_F + 5]) * a
     x2 = -cs[CS_EST_F + 5]
     x3 = x1 * slip
     if f_n > ctrl[F_KNEE] * 1.5 and cs[CS_EST_N] < EST_N:
@@ -453,19 +465,16 @@ def _output_rate(ctrl, cs, meas, p, slip, dt):
             cs[k] += u * v * dt
             k += 1
         if cs[CS_EST_N] == EST_EARLY_N:
-            j = _inertia_fit(cs)
-            if j > EST_EARLY_FACTOR * cs[CS_J1] and j > EST_EARLY_MIN:
-                cs[CS_J1] = j
+            cs[CS_J1] = _inertia_taken(_inertia_fit(cs), cs[CS_J1])
 
 
 @_inline
-def _friction_estimate(ctrl, cs, meas, p, slip, dt, slow):
+def _friction_estimate(ctrl, cs, meas, slip, ratio, f_n, mu, knee, dt, slow):
     """Low-pass the friction factor: measured torque over the nominal model's at the measured pressure, once the
-    plates press hard enough for the ratio to mean something; ``slow``: :func:`_theta_slowing`."""
-    f_n = friction.normal_force(p, cs[CS_KISS], ctrl[A_P])
+    plates press hard enough for the ratio to mean something (``f_n``, ``mu``, ``knee`` as for
+    :func:`_output_rate`); ``slow``: :func:`_theta_slowing`."""
     if f_n > ctrl[F_KNEE] * 1.5:
-        ratio = _ratio(ctrl, meas)
-        t_model = ctrl[ETA] / ratio * _mu(ctrl, slip) * f_n * friction.knee(f_n, ctrl[F_KNEE])
+        t_model = ctrl[ETA] / ratio * mu * f_n * knee
         t_clutch = meas[M_TR] + ctrl[ETA] / ratio * cs[CS_J1] * cs[CS_DW1]
         theta = min(max(t_clutch / t_model, THETA_MIN), THETA_MAX)
         if cs[CS_THETA_N] > 0.0:
@@ -524,9 +533,11 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     ratio = _ratio(ctrl, meas)
     slip = meas[M_WP] - meas[M_WS] / ratio
     _output_swing(cs, meas, dt)
-    _output_rate(ctrl, cs, meas, p, slip, dt)
+    f_n = friction.normal_force(p, cs[CS_KISS], ctrl[A_P])
+    mu, knee = _mu(ctrl, slip), friction.knee(f_n, ctrl[F_KNEE])
+    _output_rate(ctrl, cs, meas, slip, ratio, f_n, mu, knee, dt)
     slow = _theta_slowing(cs)
-    _friction_estimate(ctrl, cs, meas, p, slip, dt, slow)
+    _friction_estimate(ctrl, cs, meas, slip, ratio, f_n, mu, knee, dt, slow)
     th = cs[CS_THETA]
     if cs[CS_THETA_N] >= THETA_TREND_N:
         share = THETA_TREND_SHARE * (W1_DROP_MAX - slow) / (W1_DROP_MAX - 1.0)
@@ -840,7 +851,7 @@ def _common(r: np.ndarray, kind: int, dt: float, u_range: tuple[float, float]) -
 
 
 def initial_state(kiss_Pa: float, learnt: bool = False, friction_factor: float | None = None,
-                  slope: float | None = None, inertia: float | None = None) -> np.ndarray:
+                  slope: float | None = None, inertia: float = 0.0) -> np.ndarray:
     """The controller's state before a launch.
 
     Parameters
@@ -855,16 +866,23 @@ def initial_state(kiss_Pa: float, learnt: bool = False, friction_factor: float |
     slope
         The friction factor's slope with slip (1/(rad/s)) learnt on earlier launches there, if any.
     inertia
-        The clutch output's inertia (kg m^2) measured on earlier launches, if any (else the design's).
+        The clutch output's inertia (kg m^2) the friction-factor estimate starts from: one measured on earlier
+        launches, or the design's ``j_1`` (:func:`start_inertia`).
     """
     cs = np.zeros(N_CS)
-    cs[CS_J1] = -1.0 if inertia is None else inertia
+    cs[CS_J1] = inertia
     cs[CS_KISS] = kiss_Pa
     cs[CS_KISS_LEARNT] = float(learnt)
     cs[CS_THETA_START] = friction_factor or 0.0
     cs[CS_SLOPE] = slope or 0.0
     cs[CS_SLOPE_FOUND] = np.nan
     return cs
+
+
+def start_inertia(ctrl: np.ndarray, learnt: float | None) -> float:
+    """The clutch output inertia (kg m^2) a launch of record ``ctrl`` starts from: ``learnt`` on earlier launches, or
+    the design's."""
+    return float(ctrl[J_1]) if learnt is None else learnt
 
 
 def output_inertia(cs: np.ndarray) -> float | None:

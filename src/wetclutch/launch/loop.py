@@ -303,10 +303,10 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     out_u = np.zeros(n)
     learnt = adaptation or Adaptation()
     start = learnt.kiss(temp) if d.kind == "launch" else None
+    inertia = control.start_inertia(ctrl, learnt.inertia) if d.kind == "launch" else None
     cs = control.initial_state(d.settings["p_kiss"] if start is None else start, start is not None,
                                learnt.friction_factor(temp) if d.kind == "launch" else None,
-                               learnt.friction_slope(temp) if d.kind == "launch" else None,
-                               learnt.inertia if d.kind == "launch" else None)
+                               learnt.friction_slope(temp) if d.kind == "launch" else None, inertia or 0.0)
     t_after = cond.t_after + (cond.hold_time if cond.post_sync_hold else 0.0)
     coldstart.begin(net, ext, ws)
     zf, lock, m = np.zeros((N_CH, 2)), np.full(1, -1.0), 0
@@ -362,11 +362,10 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     slope = float(cs[control.CS_SLOPE_FOUND]) if d.kind == "launch" and np.isfinite(cs[control.CS_SLOPE_FOUND]) else None
     summary.update(friction_slope_start=learnt.friction_slope(temp) if d.kind == "launch" else None,
                    friction_slope_found=slope)
-    inertia = control.output_inertia(cs) if d.kind == "launch" else None
-    summary.update(output_inertia_start_kg_m2=(learnt.inertia if learnt.inertia is not None else d.settings["j_1"])
-                   if d.kind == "launch" else None, output_inertia_found_kg_m2=inertia)
+    measured = control.output_inertia(cs) if d.kind == "launch" else None
+    summary.update(output_inertia_start_kg_m2=inertia, output_inertia_found_kg_m2=measured)
     if found is not None:
-        learnt = learnt.learn(temp, found, friction, slope, inertia)
+        learnt = learnt.learn(temp, found, friction, slope, measured)
     return LaunchResult(signals, truth, summary, cond, d.kind, tr.stats, found, learnt)
 
 

@@ -67,7 +67,7 @@ from ..errors import WetclutchError
 from ..params import Params
 from ..physics import friction
 from . import ranges as ranges_mod
-from .controller import EST_EARLY_FACTOR, EST_EARLY_MIN, TAU_W1_RATE, THETA_TREND_SHARE
+from .controller import TAU_W1_RATE, THETA_TREND_SHARE, inertia_taken
 from .design import Design, fill_times, torque_step
 
 
@@ -135,8 +135,8 @@ class LaunchMargins:
 def estimate_inertia(design_j_1: float, j_1: float) -> float:
     """The clutch output inertia (kg m^2) a launch's friction-factor estimate takes through its response, on a clutch
     output ``j_1`` and a design's ``design_j_1``: the design's, or ``j_1`` where the launch measures it within
-    (one heavy enough, :data:`~wetclutch.launch.controller.EST_EARLY_N`)."""
-    return j_1 if j_1 > max(EST_EARLY_FACTOR * design_j_1, EST_EARLY_MIN) else design_j_1
+    (:func:`~wetclutch.launch.controller.inertia_taken`, the fit taken as exact)."""
+    return inertia_taken(j_1, design_j_1)
 
 
 def _valve_step(design: Design, plant: Params, temp_C: float, fill: np.ndarray) -> tuple[float, float]:
