@@ -1,9 +1,11 @@
 """Kiss-point finding within a launch and adaptation across launches, on clutches whose kiss point drifted."""
 
+import numpy as np
 import pytest
 
 from wetclutch.errors import WetclutchError
 from wetclutch.launch import adaptation, design, loop, metrics, verify
+from wetclutch.launch import controller as control
 from wetclutch.params import Params, load
 from wetclutch.physics import actuator
 
@@ -302,3 +304,24 @@ def test_a_short_stroke_is_filled_without_pressing_the_plates():
     s = loop.simulate(plant, design.cached(plant, "launch"), loop.Conditions(t_ref=100.0, oil_temp_C=60.0)).summary
     assert s["all_pass"], s
     assert s["standby_peak_Nm"] < 50.0 and s["creep_Nm"] < metrics.REQ_CREEP_NM, s
+
+
+def test_sensor_noise_at_rest_is_not_taken_for_the_end_of_the_fills_rise():
+    # a clutch whose reset spring's prestress (1.63 bar) lies 0.23 bar above its design's: the full-input fill must run
+    # until the chamber's steep rise has ended there. A noisy pressure sensor at rest (its first readings, recorded on
+    # such a launch, 0.08 to -0.02 bar) is flat too; taken for that end, it placed the kiss point at the search's
+    # lower limit, the fill ended at once and the piston stroked only once torque was asked for (a slam of 180 %)
+    d = design.cached(load(overrides={"hydraulics.p_prestress": 1.4e5}), "launch")
+    rec = design.record(d, 1e-3)
+    cs = control.initial_state(d.settings["p_kiss"])
+    rest = [0.084, 0.047, -0.011, -0.019, 0.064]
+    rise = [0.30, 0.62, 1.16, 1.633]
+    stroke = [1.634 + 0.0007 * k for k in range(60)]
+    meas = np.zeros(len(control.MEASURED))
+    meas[control.M_WP], meas[control.M_TEMP] = 150.0, 30.0
+    u = []
+    for p in rest + rise + stroke:
+        meas[control.M_P] = p * 1e5
+        u.append(control.step(rec, cs, meas, 0.0))
+    assert min(u) == rec[control.U_MAX]  # full input throughout: the stroke has 0.2 bar to go
+    assert cs[control.CS_KISS] == pytest.approx(1.634e5 + d.settings["stroke_span"], abs=0.03e5)

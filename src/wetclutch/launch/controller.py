@@ -181,10 +181,10 @@ N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power 
  CS_FOUND, CS_TF, CS_PF5, CS_N, CS_CALM, CS_TREF, CS_THETA_START, CS_THETA_N, CS_THETA_LEARNT, CS_DPF,
  CS_PPREV, CS_TMIN, CS_REF1, CS_ANSWERED, CS_TREQ, CS_KISS_LEARNT, CS_W1PEAK, CS_W1DROP, CS_HIGH, CS_STROKE, CS_DTHETA,
  CS_THETA_PREV, CS_SLOPE, CS_SLIP_PREV, CS_SLIP_A, CS_THETA_A, CS_SLOPE_FOUND, CS_J1, CS_W1F, CS_DW1,
- CS_EST_N) = range(44)
+ CS_EST_N, CS_FILL_LOW) = range(45)
 #: the output-inertia estimate's filters (two stages each for the axle torque and the model's clutch torque; the
 #: clutch output's speed and its rate) and the sums of its least-squares problem (the upper triangle of A'A, then A'y)
-CS_EST_F = 44
+CS_EST_F = 45
 N_EST_F = 6
 CS_EST_S = CS_EST_F + N_EST_F
 N_EST_S = 9
@@ -199,6 +199,10 @@ TAU_PF5 = 0.005
 #: PLATEAU_AFTER (s) into the fill, where the rise is only beginning
 PLATEAU_RATE = 5.0e5
 PLATEAU_AFTER = 0.005
+#: nor before the fast-filtered pressure has risen this far (Pa) above its least value in the fill: before the chamber's
+#: rise begins, the noise of a sensor at rest is a plateau too (a noisy first sample of 0.08 bar once ended the fill
+#: after 8 ms, with a 1.6 bar prestress still ahead)
+RISE_SEEN = 0.1e5
 #: a fill whose rise has not ended PLATEAU_LATEST (s) into it (a chamber that fills slowly, or noise) is taken as
 #: stroking, with the kiss point as believed
 PLATEAU_LATEST = 0.1
@@ -678,8 +682,10 @@ def _stroke_start(ctrl, cs, p, dt):
     (``k_reset x_contact / A_p``) above it: on a launch with nothing learnt that places the plates wherever a
     stiffer or weaker prestress has moved them (the whole stroke's pressure moves with it, so that the fill's end,
     judged by pressure from a wrong kiss point, would come at once or too late)."""
+    cs[CS_FILL_LOW] = min(cs[CS_FILL_LOW], cs[CS_PF5])
     late = cs[CS_N] * dt > PLATEAU_LATEST
-    if not late and (cs[CS_N] * dt < PLATEAU_AFTER or cs[CS_PF5] < ARM_P or (p - cs[CS_PF5]) / TAU_PF5 > PLATEAU_RATE):
+    if not late and (cs[CS_N] * dt < PLATEAU_AFTER or cs[CS_PF5] - cs[CS_FILL_LOW] < RISE_SEEN
+                     or (p - cs[CS_PF5]) / TAU_PF5 > PLATEAU_RATE):
         return
     cs[CS_STROKE] = 1.0
     if not late and cs[CS_KISS_LEARNT] == 0.0 and ctrl[STROKE_SPAN] > 0.0:
@@ -716,6 +722,7 @@ def _launch(ctrl, cs, meas, t_ref):
     cs[CS_TF] = meas[M_TR] if first else cs[CS_TF] + (meas[M_TR] - cs[CS_TF]) * dt / (0.02 + dt)
     cs[CS_PF5] = p if first else cs[CS_PF5] + (p - cs[CS_PF5]) * dt / (TAU_PF5 + dt)
     if first:
+        cs[CS_FILL_LOW] = p
         for i in range(N_RECENT):
             cs[CS_RECENT + i] = p
     cs[CS_RECENT + int(cs[CS_N]) % N_RECENT] = cs[CS_PF5]
