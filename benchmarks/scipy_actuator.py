@@ -35,7 +35,7 @@ Simplifications (checked against the engine's event log of this run): the clutch
 from open to slipping (it never locks within 5 s) and the road-load brake only releases, so
 the reverse switches are not modelled.
 
-Agreement with the engine (``__main__``): the same events (stem stick/slip switches, contact,
+Agreement with the engine (``__main__``): the same events (stem stick/slip switches, the piston leaving its stop, contact,
 road-load release, the amplifier's modes); pressure within 2 Pa at 1.2-5 s, torque onset within 7 us; about 100 Pa at
 worst on the 1 ms grid, right after contact (a steep rise; integration error of both sides);
 the energy terms at 5 s within 0.01 %, and the energy balance closes to 3e-8 of the
@@ -286,8 +286,8 @@ def _event(fun, direction, terminal=True):
     return fun
 
 
-def _events(m, modes, want_onset, u):
-    """``(name, event function)`` pairs valid in the current modes at input ``u``."""
+def _events(m, modes, want_onset, u, y):
+    """``(name, event function)`` pairs valid in the current modes at input ``u`` and state ``y``."""
     mc, mb, ms, mg, ma = modes
     ev = []
     if mc == 0:
@@ -312,6 +312,9 @@ def _events(m, modes, want_onset, u):
         ev.append(("amp", _event(lambda t, y, *_: -_regulator(m.r, y, u), -1)))
     else:
         ev.append(("amp", _event(lambda t, y, *_: _within(_regulator(m.r, y, u), v_sup), -1)))
+    if y[P] < m.r[A.P_PRE]:
+        # the piston leaves its stop: the stroke's compliance, a thousand times the oil's, begins
+        ev.append(("stroke", _event(lambda t, y, *_: y[P] - m.r[A.P_PRE], 1)))
     return ev
 
 
@@ -326,6 +329,8 @@ def _switch(m, name, y, modes, u):
         ma = 0 if ma != 0 else (1 if v > 0.5 * m.r[A.V_SUP] else -1)
     elif name == "contact":
         mc = 1 if y[W_P] > y[W_1] else -1
+    elif name == "stroke":
+        y[P] = m.r[A.P_PRE] * (1.0 + 1e-12)  # on the stroke's side of the root
     elif name == "brake":
         mb = 1 if _axle(m, y) > 0.0 else -1
     elif name == "stem_slip":
@@ -365,7 +370,7 @@ def actuator_step_scipy(t_end: float = 5.0, method: str = "BDF", rtol: float = 1
     for t_b, u in ((min(T_STEP, t_end), U0), (t_end, U1)):
         modes = (*modes[:4], _amp_mode(m.r, y, u))  # the input steps: the output stage's mode anew
         while t < t_b:
-            named = _events(m, modes, onset is None, u)
+            named = _events(m, modes, onset is None, u, y)
             t_eval = grid[k : np.searchsorted(grid, t_b, side="right")]
             sol = solve_ivp(_rhs, (t, t_b), y, method=method, t_eval=t_eval, rtol=rtol, atol=atol,
                             events=[f for _, f in named], args=(m, modes, u))

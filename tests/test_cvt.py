@@ -109,7 +109,10 @@ def test_a_moving_ratio_needs_limits_that_hold_it():
 
 # ------------------------------------------------------------------ the post-sync hold on the default rig
 
-HOLD_NM = 25.0  # locks at 10.3 s; 25-35 N m hold 1.1-1.6 s, 40 N m 0.98 s; 20 N m locks too late (13.1 s)
+#: locks at 7.3 s and holds 1.1 s (seeds 0 and 1); 40 N m holds 0.98 s, 20 N m locks too late (13.1 s). At 25-30 N m
+#: the hold keeps the torque 1.3-1.6 s where the lock-up's jolt stays within the band, and not at all where it does
+#: not (one launch of eight)
+HOLD_NM = 35.0
 
 
 @pytest.fixture(scope="module")

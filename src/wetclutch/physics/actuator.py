@@ -25,6 +25,11 @@ Chain of effects::
     C(p) = V(p)/K_oil (+ A_p^2 / k_reset while the piston strokes)
     F_n = A_p (p - p_contact) after the plates touch
 
+The piston's compliance while it strokes is some thousand times the oil's, over a pressure band
+of a tenth of a bar or two: the piston at its stop, stroking and at the plates are three modes,
+switched at located events (:func:`piston_event`) where the pressure reaches the band's edges. A
+step that crossed the band unseen would fill the clutch without its stroke.
+
 Electronics: in DC mode a current controller with setpoint ``g_current * u``
 drives the coil; its output saturates at the supply voltage, so a large step
 rises with ``L/R``; when the controller asks for a negative voltage the output
@@ -134,6 +139,41 @@ def piston_position(p, act):
     if p >= act[P_CONTACT]:
         return act[X_CONTACT]
     return act[A_P] / act[K_RESET] * (p - act[P_PRE])
+
+
+#: the clutch piston's modes: at its stop (below the reset spring's prestress), stroking (the spring's compliance
+#: adds to the oil's), at the plates (above the contact pressure)
+AT_STOP, STROKING, AT_PLATES = 0, 1, 2
+#: the actuator's event function is in volts (the amplifier's range); the piston's, in pascals, counts 1 bar as 10 V
+PISTON_EVENT_SCALE = 1e-4
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def piston_mode(p, act):
+    """The piston's mode at pressure ``p`` (:data:`AT_STOP`, :data:`STROKING`, :data:`AT_PLATES`)."""
+    if p <= act[P_PRE]:
+        return AT_STOP
+    if p >= act[P_CONTACT]:
+        return AT_PLATES
+    return STROKING
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def piston_event(p, act, mode):
+    """The piston's event function (Pa): >= 0 while ``mode`` holds. The stroke's compliance is a thousand times the
+    oil's: a step that crossed the stroke's narrow pressure band unseen would fill the clutch without its stroke."""
+    if mode == AT_STOP:
+        return act[P_PRE] - p
+    if mode == AT_PLATES:
+        return p - act[P_CONTACT]
+    return min(p - act[P_PRE], act[P_CONTACT] - p)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def event(cur, p, u, act, amp_mode, piston):
+    """The actuator's event function: the amplifier's (:func:`amplifier_event`) and the piston's
+    (:func:`piston_event`), whichever is nearer its switch."""
+    return min(amplifier_event(cur, u, act, amp_mode), PISTON_EVENT_SCALE * piston_event(p, act, piston))
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
@@ -249,13 +289,14 @@ def _range_margin(v, act, mode):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE):
+def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE, piston=AT_STOP):
     """Write the actuator's state rates into ``dx``; return (force on the stem, clutch normal force,
-    the amplifier's event function).
+    the actuator's event function, :func:`event`).
 
     ``u`` is the input (V in DC mode; ignored in PWM mode, where ``ext`` holds the level) and
     ``mode`` the DC amplifier's (:func:`amplifier_mode`, decided at the last restart: within a step
-    the regulating mode's voltage runs on beyond its range until the event is located).
+    the regulating mode's voltage runs on beyond its range until the event is located), ``piston`` the
+    piston's (:func:`piston_mode`, likewise: the stroke's compliance holds until its band's edge is located).
     With ``full`` False only the forces are wanted: the pressure derivative is skipped.
     """
     i0 = int(act[STATE])
@@ -315,7 +356,7 @@ def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE):
             q_out += act[G_RELIEF] * (p - act[P_RELIEF])
         # ---- oil volume behind the valve and the piston's compliance
         cap = (act[V0] + act[A_P] * piston_position(p, act)) * oil.compliance_nb(pp, act[K_OIL], act[AIR])
-        if act[P_PRE] < p < act[P_CONTACT]:
+        if piston == STROKING:
             cap += act[A_P] * act[A_P] / act[K_RESET]
         dx[i0 + PRESSURE] = (q_in - q_out) / cap
         dx[i0 + VOLUME_IN] = q_in
@@ -325,7 +366,7 @@ def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE):
     dp_in = act[P_SUP] - p - act[R_LINE] * q_in
     f_flow = act[K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * pp)
     f_stem = f_mag + act[F_PRE] - act[A_FB] * feedback_pressure(p, q_fb, act) - f_flow
-    return f_stem, normal_force(p, act), g_amp
+    return f_stem, normal_force(p, act), min(g_amp, PISTON_EVENT_SCALE * piston_event(p, act, piston))
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")

@@ -24,7 +24,7 @@ from .compiled import jit, jit_inline
 from .dopri import C, component, dense, error_norm, stage, weights
 from .modes import forget, settle, stale
 from .rhs import copy, events, rhs, rhs_call
-from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_AMP, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT,
+from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_AMP, FS_H, FS_PISTON, FS_LOCKS, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT,
                         FS_PWM_START, FS_T, GRIP, IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE,
                         IS_STEPS, IS_SWITCHES, LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
 
@@ -49,11 +49,12 @@ def _event_value(e, theta_t, t_old, h, y_old, ws, net, ext):
         return ws.clm[j] * _slip_at((theta_t - t_old) / h, j, y_old, h, ws, net)
     a = net.act
     if a.shape[0] > 0 and e == ws.g_old.shape[0] - 1:
-        # the valve amplifier's (the last event function): the coil current and the input alone
+        # the actuator's (the last event function): the coil current, the pressure and the input alone
         weights((theta_t - t_old) / h, ws.bw)
         cur = component(y_old, ws.K, h, ws.bw, int(a[act_.STATE]) + act_.CURRENT)
+        p = component(y_old, ws.K, h, ws.bw, int(a[act_.STATE]) + act_.PRESSURE)
         u = signals.value(int(a[act_.U_SIG]), theta_t, False, net.sig, net.tab, ext)
-        return act_.amplifier_event(cur, u, a, ws.fstate[FS_AMP])
+        return act_.event(cur, p, u, a, ws.fstate[FS_AMP], ws.fstate[FS_PISTON])
     _eval_at(theta_t, t_old, h, y_old, ws, net, ext)
     return ws.g_new[e]
 

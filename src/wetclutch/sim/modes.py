@@ -18,7 +18,7 @@ from ..physics import actuator as act_
 from . import signals
 from .compiled import jit, jit_inline
 from .rhs import LIM_MAX, LIM_MIN, capacity, hold_margins, rate_command, ratio, rhs_call, slip, static_limit
-from .workspace import FREE, FS_AMP, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets, fs_grip, fs_ratio
+from .workspace import FREE, FS_AMP, FS_PISTON, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets, fs_grip, fs_ratio
 
 
 @jit_inline
@@ -254,6 +254,7 @@ def settle(t, net, ext, ws):
     if net.act.shape[0] > 0:
         u = signals.value(int(net.act[act_.U_SIG]), t, False, net.sig, net.tab, ext)
         ws.fstate[FS_AMP] = act_.amplifier_mode(x, net.act, u)
+        ws.fstate[FS_PISTON] = act_.piston_mode(x[int(net.act[act_.STATE]) + act_.PRESSURE], net.act)
     # a clutch or gear released in this settle must not be re-locked (no cycling)
     released[:] = 0
     redundant = False

@@ -541,7 +541,7 @@ def _event_source(network: Network, e: int, n_events: int) -> str:
         return f"clutch {network.clutches[e // 2].name!r}"
     ng = len(network.gears)
     if network.act is not None and e == n_events - 1:
-        return "the valve amplifier (its regulating range)"
+        return "the valve actuator (its amplifier's regulating range, the clutch piston's stop and contact)"
     if e >= 2 * nc + 2 * ng:
         return f"gear {network.gears[e - 2 * nc - 2 * ng].name!r} (its ratio limits)"
     if e >= 2 * nc:

@@ -33,7 +33,7 @@ from ..physics import thermal as th_
 from . import signals
 from .compiled import jit, jit_inline
 from .linalg import lu_factor, lu_solve, svd_jacobi
-from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, FS_AMP, FS_AMP_G, IS_BAD_BODY, IS_REDUNDANT, LOCKED,
+from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, FS_AMP, FS_AMP_G, FS_PISTON, IS_BAD_BODY, IS_REDUNDANT, LOCKED,
                         STUCK, aux_offsets, fs_grip, fs_ratio)
 
 # columns of NetArrays.gr_lim: a moving ratio's limits and its rate limit (1/s)
@@ -428,7 +428,8 @@ def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
         # the actuator's states' rates into dx, its force on the valve stem into z and its power into p_src
         # (here, not in a helper of its own: each level of inlining copies the actuator's whole IR once more)
         u = signals.value(int(net.act[act_.U_SIG]), t, left, net.sig, net.tab, ext)
-        f_stem, _, ws.fstate[FS_AMP_G] = act_.evaluate(x, net.act, u, ext, dx, full, ws.fstate[FS_AMP])
+        f_stem, _, ws.fstate[FS_AMP_G] = act_.evaluate(x, net.act, u, ext, dx, full, ws.fstate[FS_AMP],
+                                                       ws.fstate[FS_PISTON])
         stem = int(net.act[act_.STEM_BODY])
         z[stem] += f_stem
         p_src += f_stem * x[stem]
@@ -539,5 +540,5 @@ def events(x, aux, net, clm, grm, g, fstate):
                 g[e + k] = min(x[i] - net.gr_lim[k, LIM_MIN], net.gr_lim[k, LIM_MAX] - x[i])
         e += ng
     if n_amp:
-        # the valve amplifier's mode: its function as the right-hand side last evaluated it (at ``x``)
+        # the valve amplifier's and the piston's modes: their function as the right-hand side last evaluated it (at ``x``)
         g[e] = fstate[FS_AMP_G]

@@ -41,8 +41,9 @@ FS_PWM_NEXT = 3  # time of the next PWM edge (-inf: not started)
 FS_PWM_START = 4  # start of the current PWM period
 FS_PWM_H = 5  # + level (0 or 1): the first step after the last edge to that level (0: none yet)
 FS_AMP = 7  # the valve amplifier's mode (actuator.REGULATE, SATURATED, FREEWHEEL; decided at restarts)
-FS_AMP_G = 8  # its event function at the last evaluation of the right-hand side
-FS_LOCKS = 9  # + 2 j + LOCK_FIRST / LOCK_LAST: first and last time clutch j locked (-1: never)
+FS_AMP_G = 8  # the actuator's event function (amplifier and piston) at the last evaluation of the right-hand side
+FS_PISTON = 9  # the clutch piston's mode (actuator.AT_STOP, STROKING, AT_PLATES; decided at restarts)
+FS_LOCKS = 10  # + 2 j + LOCK_FIRST / LOCK_LAST: first and last time clutch j locked (-1: never)
 LOCK_FIRST, LOCK_LAST = 0, 1
 N_FSTATE = FS_LOCKS  # without the lock times, which follow, two per clutch, the gears' slots (fs_ratio) and the
 # clutches' grip margins (fs_grip)
@@ -101,7 +102,8 @@ def moving_gears(net) -> int:
 
 def n_events(net) -> int:
     """Number of event functions of the compiled network ``net``: two per clutch and per gear, one per moving
-    ratio (its limits; none without moving ratios), one for a valve amplifier (its regulating range)."""
+    ratio (its limits; none without moving ratios), one for a valve actuator (its amplifier's regulating range, its
+    piston's stop and contact)."""
     nc, ng = net.cl_a.size, net.gr_in.size
     return 2 * nc + 2 * ng + (ng if moving_gears(net) else 0) + (1 if net.act.size else 0)
 
