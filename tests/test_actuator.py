@@ -47,7 +47,7 @@ def test_fill_phases_in_order(pwm_step):
 def test_a_fast_fill_through_a_narrow_stroke_takes_the_strokes_oil():
     # a 1.64 bar prestress and a 0.65 mm stroke: the piston strokes between 1.64 and 1.74 bar, where its compliance is
     # a thousand times the oil's. The full input fills the chamber in 5 ms; by the plates' contact the clutch must
-    # have taken the stroke's volume A_p x_contact (a step that crossed the 0.1 bar band unseen took 4 % of it)
+    # have taken the stroke's volume A_p x_contact (a step that crosses the 0.1 bar band unseen takes 4 % of it)
     params = wc.params.load(overrides={"hydraulics.p_prestress": 1.64e5, "hydraulics.x_contact": 0.65e-3})
     rn = clutch.build(params, Step(0.005, 0.0, 5.0), temp_C=30.0)
     tr = integrate(rn.network, 0.2, rtol=1e-5, atol=rn.atol(1e-9))  # a launch's tolerances

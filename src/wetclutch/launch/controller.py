@@ -200,7 +200,7 @@ TAU_PF5 = 0.005
 PLATEAU_RATE = 5.0e5
 PLATEAU_AFTER = 0.005
 #: nor before the fast-filtered pressure has risen this far (Pa) above its least value in the fill: before the chamber's
-#: rise begins, the noise of a sensor at rest is a plateau too (a noisy first sample of 0.08 bar once ended the fill
+#: rise begins, the noise of a sensor at rest is a plateau too (a noisy first sample of 0.08 bar would end the fill
 #: after 8 ms, with a 1.6 bar prestress still ahead)
 RISE_SEEN = 0.1e5
 #: a fill whose rise has not ended PLATEAU_LATEST (s) into it (a chamber that fills slowly, or noise) is taken as
