@@ -170,10 +170,16 @@ def piston_event(p, act, mode):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def _with_piston(g_amp, p, act, piston):
+    """The amplifier's event function ``g_amp`` and the piston's at ``p``, whichever is nearer its switch."""
+    return min(g_amp, PISTON_EVENT_SCALE * piston_event(p, act, piston))
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
 def event(cur, p, u, act, amp_mode, piston):
     """The actuator's event function: the amplifier's (:func:`amplifier_event`) and the piston's
     (:func:`piston_event`), whichever is nearer its switch."""
-    return min(amplifier_event(cur, u, act, amp_mode), PISTON_EVENT_SCALE * piston_event(p, act, piston))
+    return _with_piston(amplifier_event(cur, u, act, amp_mode), p, act, piston)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
@@ -366,7 +372,7 @@ def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE, piston=AT_STOP):
     dp_in = act[P_SUP] - p - act[R_LINE] * q_in
     f_flow = act[K_FLOW] * (o_sup * max(dp_in, 0.0) - o_drn * pp)
     f_stem = f_mag + act[F_PRE] - act[A_FB] * feedback_pressure(p, q_fb, act) - f_flow
-    return f_stem, normal_force(p, act), min(g_amp, PISTON_EVENT_SCALE * piston_event(p, act, piston))
+    return f_stem, normal_force(p, act), _with_piston(g_amp, p, act, piston)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")

@@ -24,9 +24,9 @@ from .compiled import jit, jit_inline
 from .dopri import C, component, dense, error_norm, stage, weights
 from .modes import forget, settle, stale
 from .rhs import copy, events, rhs, rhs_call
-from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_AMP, FS_H, FS_PISTON, FS_LOCKS, FS_LOG_ERR, FS_PWM_H, FS_PWM_NEXT,
-                        FS_PWM_START, FS_T, GRIP, IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE,
-                        IS_STEPS, IS_SWITCHES, LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
+from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_AMP, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PISTON, FS_PWM_H,
+                        FS_PWM_NEXT, FS_PWM_START, FS_T, GRIP, IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED,
+                        IS_SETTLE, IS_STEPS, IS_SWITCHES, LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
 
 
 @jit_inline

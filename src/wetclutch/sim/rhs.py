@@ -33,8 +33,8 @@ from ..physics import thermal as th_
 from . import signals
 from .compiled import jit, jit_inline
 from .linalg import lu_factor, lu_solve, svd_jacobi
-from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, FS_AMP, FS_AMP_G, FS_PISTON, IS_BAD_BODY, IS_REDUNDANT, LOCKED,
-                        STUCK, aux_offsets, fs_grip, fs_ratio)
+from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, FS_AMP, FS_AMP_G, FS_PISTON, IS_BAD_BODY,
+                        IS_REDUNDANT, LOCKED, STUCK, aux_offsets, fs_grip, fs_ratio)
 
 # columns of NetArrays.gr_lim: a moving ratio's limits and its rate limit (1/s)
 LIM_MIN, LIM_MAX, LIM_RATE = 0, 1, 2
@@ -540,5 +540,6 @@ def events(x, aux, net, clm, grm, g, fstate):
                 g[e + k] = min(x[i] - net.gr_lim[k, LIM_MIN], net.gr_lim[k, LIM_MAX] - x[i])
         e += ng
     if n_amp:
-        # the valve amplifier's and the piston's modes: their function as the right-hand side last evaluated it (at ``x``)
+        # the valve amplifier's and the piston's modes: their function as the right-hand side last evaluated it
+        # (at ``x``)
         g[e] = fstate[FS_AMP_G]
