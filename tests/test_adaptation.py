@@ -297,9 +297,9 @@ def test_a_heavy_clutch_output_launches_cleanly_first_time_and_after():
 
 
 def test_a_short_stroke_is_filled_without_pressing_the_plates():
-    # a 0.55 mm stroke at a 1.4 bar prestress: 0.08 bar of stroke, 6.7 cm^3 of oil, a few ms of the full input.
-    # Waiting for the stroke's start to show before leaving the full input pressed the plates (a 189 N m jolt on the
-    # waiting vehicle, 53 N m of creep); the fill must end before the plates and the launch meet every requirement
+    # a 0.55 mm stroke at a 1.4 bar prestress: 0.08 bar of stroke, 6.7 cm^3 of oil, a few ms of the full input:
+    # the fill must end before the plates (no jolt on the waiting vehicle, no creep) and the launch meet every
+    # requirement
     plant = load(overrides={"hydraulics.p_prestress": 1.4e5, "hydraulics.x_contact": 0.55e-3})
     s = loop.simulate(plant, design.cached(plant, "launch"), loop.Conditions(t_ref=100.0, oil_temp_C=60.0)).summary
     assert s["all_pass"], s
