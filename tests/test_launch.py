@@ -187,6 +187,51 @@ def test_a_heavy_clutch_output_ringing_at_a_low_ratio_does_not_keep_ringing(oil_
     assert res.summary["ripple_pct"] < metrics.REQ_RIPPLE_PCT
 
 
+def test_the_requests_s_curve_is_the_raised_cosine_of_a_step():
+    # a step through the moving average of ref_weights(n) is (1 - cos(pi k / n)) / 2 after k samples, 1 from n on
+    n = 180
+    w = control.ref_weights(n)
+    assert w.sum() == pytest.approx(1.0, abs=1e-12) and np.all(w >= 0.0)
+    k = np.arange(1, n + 1)
+    assert np.cumsum(w) == pytest.approx((1.0 - np.cos(np.pi * k / n)) / 2.0, abs=1e-12)
+    # the controller's ring buffer gives the same moving average, for a step and past the ring's length
+    ctrl = designs.record(designs.cached(Params()), 1e-3)
+    cs = np.zeros(control.N_CS)
+    out = [control._shaped(ctrl, cs, 50.0) for _ in range(int(ctrl[control.REF_N]) + 20)]
+    m = int(ctrl[control.REF_N])
+    assert m == round(designs.cached(Params()).settings["ref_rise"] / 1e-3)
+    assert out[:m] == pytest.approx(50.0 * np.cumsum(control.ref_weights(m)), rel=1e-12)
+    assert out[m:] == pytest.approx([50.0] * 20, rel=1e-12)
+
+
+@pytest.mark.parametrize("j_1, ratio", [(0.001, 0.4), (0.001, 1.0), (0.02, 0.45), (0.004, 0.5), (0.004, 0.6)])
+def test_the_request_takes_the_s_curve_where_the_clutch_output_rings(j_1, ratio):
+    # the output's mode on the axle's side, J_1 / i^2 on k_a with d_a, is underdamped where d_a i / (2 sqrt(k_a J_1))
+    # is below 1: never for the built-in rig's output (1 g m^2) over the ratios 0.4-1 (below 0.28 only), for one 4
+    # times heavier below a ratio of 0.55, for one 20 times heavier below 1.24
+    d = designs.cached(Params())
+    ctrl = designs.record(d, 1e-3)
+    cs = np.zeros(control.N_CS)
+    cs[control.CS_J1] = j_1
+    meas = np.zeros(len(control.MEASURED))
+    meas[control.M_RATIO] = ratio
+    k_a, d_a = Params().driveline.k_a, Params().driveline.d_a
+    zeta = d_a * ratio / (2.0 * np.sqrt(k_a * j_1))
+    assert control._rings(ctrl, cs, meas) == (zeta < 1.0)
+
+
+def test_a_heavy_clutch_output_known_to_the_design_settles_in_time_with_the_s_curve():
+    # a clutch output 30 times the built-in rig's at a ratio of 0.45, known to the design: through the two stages the
+    # request rings it (settled t95 0.25 s, measured); through the S-curve it settles in time (0.16 s)
+    plant = params_load(overrides={"driveline.J_1": 0.03, "driveline.ratio": 0.45})
+    d = designs.design(plant)
+    cond = launch.Conditions(t_ref=150.0, oil_temp_C=60.0, seed=3)
+    shaped, stages = (launch.simulate(plant, dd, cond, nominal=metrics.Response.empty()).summary
+                      for dd in (d, designs.with_settings(d, d_a=1e5)))  # an axle damped so that nothing rings
+    assert shaped["t95_settled_s"] < metrics.REQ_T95_S < stages["t95_settled_s"]
+    assert shaped["overshoot_pct"] < 10.0
+
+
 def test_the_plates_touch_no_sooner_than_the_full_input_fill_allows():
     # The valve's full input from t = 0 is the fastest fill there is: ``design.fill_times`` strokes the piston
     # through 60 % of its travel that way (an open-loop run), so the plates' first contact (the true clutch torque)

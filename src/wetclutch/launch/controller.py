@@ -168,12 +168,17 @@ LAUNCH, BASELINE = 0, 1
 (P_KISS, HOLD_OFFSET, FILL_EXIT, A_P, RATIO, ETA, MU2, MU1, MU0, F_KNEE, KP_P, KI_P, KP_T, KI_T, P_MAX, TAU_REF,
  HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, HOLD_LEAD, FILL_EXIT_COLD, FF_T0, FF_DT,
  FF_NT, FF_P0, FF_DP, FF_NP, KI_HOLD, DITHER_AMP_T, DITHER_HALF_T, FF_SHIFT_T, REQ_LEAD, KD_P, CREEP_LIMIT,
- VALVE_PLAY, TRAPPED_DIP, DITHER_HALF_HIGH, DITHER_HIGH_ABOVE, STROKE_SPAN, J_1) = range(4, 49)
+ VALVE_PLAY, TRAPPED_DIP, DITHER_HALF_HIGH, DITHER_HIGH_ABOVE, STROKE_SPAN, J_1, K_A, D_A, REF_RISE) = range(4, 52)
 # baseline: its PI gains (V/N m, V/(N m s)) and the fill time (s) at each feedforward temperature
-KP_B, KI_B = 49, 50
-FILL_T = 51
+KP_B, KI_B = 52, 53
+FILL_T = 54
 N_FILL_T = 5
-FF_TABLE = FILL_T + N_FILL_T  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
+#: the request's S-curve (:func:`ref_weights`): its length in samples, then its weights (N_REF_W slots, the unused
+#: ones zero)
+REF_N = FILL_T + N_FILL_T
+REF_W = REF_N + 1
+N_REF_W = 1024
+FF_TABLE = REF_W + N_REF_W  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
 N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power first
 
 # --- controller state
@@ -191,7 +196,12 @@ N_EST_S = 9
 #: the fast-filtered pressure of the last N_RECENT samples (a ring from CS_RECENT on)
 CS_RECENT = CS_EST_S + N_EST_S
 N_RECENT = 16
-N_CS = CS_RECENT + N_RECENT
+#: whether this launch's request goes through the S-curve (1) or the two stages (0), decided at the request; the
+#: request's samples since then, and the last N_REF_W of them (a ring from CS_REF_BUF on)
+CS_SHAPED = CS_RECENT + N_RECENT
+CS_REF_N = CS_SHAPED + 1
+CS_REF_BUF = CS_REF_N + 1
+N_CS = CS_REF_BUF + N_REF_W
 #: time constant of the fast pressure filter (s)
 TAU_PF5 = 0.005
 #: the fill's steep rise has ended once the fast-filtered pressure rises slower than this (Pa/s), the stroke's ramp
@@ -502,6 +512,56 @@ def _friction_estimate(ctrl, cs, meas, slip, ratio, f_n, mu, knee, dt, slow):
             cs[CS_THETA_LEARNT] = cs[CS_THETA]
 
 
+#: damping ratio of the clutch output's mode against the axle (:func:`_rings`) below which the request goes through
+#: the S-curve
+RING_ZETA = 1.0
+
+
+@_inline
+def _rings(ctrl, cs, meas):
+    """Whether the clutch output, as heavy as the estimate takes it, rings against the axle: its mode on the axle's
+    side, ``J_1 / i^2`` on the spring ``k_a`` with the damper ``d_a``, has a damping ratio
+    ``d_a i / (2 sqrt(k_a J_1))`` below :data:`RING_ZETA`."""
+    j_1 = cs[CS_J1]
+    if j_1 <= 0.0 or ctrl[K_A] <= 0.0:
+        return False
+    return ctrl[D_A] * _ratio(ctrl, meas) < 2.0 * RING_ZETA * np.sqrt(ctrl[K_A] * j_1)
+
+
+def ref_weights(n: int) -> np.ndarray:
+    """The ``n`` weights of the request's S-curve: the raised cosine ``(1 - cos(pi k / n)) / 2`` of a step, sample
+    by sample, as a moving average's weights (they sum to 1)."""
+    k = np.arange(n + 1)
+    return np.diff(-0.5 * np.cos(np.pi * k / n))
+
+
+@_inline
+def _shaped(ctrl, cs, x):
+    """The request ``x`` through the S-curve (a finite moving average with :func:`ref_weights`): a step rises over
+    ``ref_rise`` with zero slope at both ends, and nothing of it is left after that time.
+
+    Where the clutch output rings against the axle (:func:`_rings`), the two first-order stages' steepest slope,
+    at their start, excites the ring, and their tail keeps feeding it: the raised cosine of about the same 10-90 %
+    rise (0.18 s against two stages of 30 ms) is steepest in its middle, a third less steep, and stops. On the
+    built-in rig with a clutch output of 3.67 g m^2, the ranges' x1-10 on top (300 samples, seed 7, three launches;
+    the output rings where it is heavy and the ratio low), 91.7 / 97.7 % of first / last launches passed against
+    84.3 / 93.7 % with the two stages throughout. Where the output does not ring the two stages stay: with the
+    S-curve throughout, a friction curve twice as steep as the design's overshot by 12-17 % on first launches (its
+    rise outruns the friction-factor estimate, which the two stages' slow last 5 % gave time)."""
+    n = int(ctrl[REF_N])
+    m = int(cs[CS_REF_N])
+    k = m % n
+    cs[CS_REF_BUF + k] = x
+    cs[CS_REF_N] = m + 1.0
+    acc = 0.0
+    # the ring from the newest sample back: k down to 0, then (once it has filled) n - 1 down to k + 1
+    for j in range(k + 1):
+        acc += ctrl[REF_W + j] * cs[CS_REF_BUF + k - j]
+    for j in range(k + 1, min(m + 1, n)):
+        acc += ctrl[REF_W + j] * cs[CS_REF_BUF + n + k - j]
+    return acc
+
+
 @_inline
 def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     """The pressure set point once torque is requested, and whether the request still waits for the fill."""
@@ -515,8 +575,11 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
         # the request through a critically damped prefilter (two first-order stages): a torque step
         # through the valve's fast, underdamped pressure response would jolt the driveline, and the
         # second stage starts the request with zero slope, which a stiffly damped stem can follow
-        cs[CS_REF1] += (t_ref - cs[CS_REF1]) * dt / (ctrl[TAU_REF] + dt)
-        cs[CS_REF] += (cs[CS_REF1] - cs[CS_REF]) * dt / (ctrl[TAU_REF] + dt)
+        if cs[CS_SHAPED] != 0.0:
+            cs[CS_REF] = _shaped(ctrl, cs, t_ref)
+        else:
+            cs[CS_REF1] += (t_ref - cs[CS_REF1]) * dt / (ctrl[TAU_REF] + dt)
+            cs[CS_REF] += (cs[CS_REF1] - cs[CS_REF]) * dt / (ctrl[TAU_REF] + dt)
     r = cs[CS_REF]
     e_t = r - meas[M_TR]
     if cs[CS_ANSWERED] == 0.0:
@@ -776,6 +839,8 @@ def _launch(ctrl, cs, meas, t_ref):
         phase = TORQUE
         cs[CS_REF] = 0.0
         cs[CS_REF1] = 0.0
+        cs[CS_REF_N] = 0.0
+        cs[CS_SHAPED] = 1.0 if _rings(ctrl, cs, meas) else 0.0
         # the friction factor learnt on earlier launches at this temperature, if any (the loop sets it)
         cs[CS_THETA] = cs[CS_THETA_START] if cs[CS_THETA_START] > 0.0 else ctrl[THETA0]
         cs[CS_TREQ] = cs[CS_TF]
@@ -929,7 +994,7 @@ def pack(kind: str, s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pres
              DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque", FF_SHIFT_T: "ff_shift",
              REQ_LEAD: "req_lead", KD_P: "kd_p", CREEP_LIMIT: "creep_limit", VALVE_PLAY: "valve_play",
              TRAPPED_DIP: "trapped_dip", DITHER_HALF_HIGH: "dither_half_high", DITHER_HIGH_ABOVE: "dither_high_above",
-             STROKE_SPAN: "stroke_span", J_1: "j_1"}
+             STROKE_SPAN: "stroke_span", J_1: "j_1", K_A: "k_a", D_A: "d_a", REF_RISE: "ref_rise"}
     baseline = {P_KISS: "p_kiss", HOLD_OFFSET: "hold_offset", DIP: "dip", DIP_N: "dip_n", KP_B: "kp", KI_B: "ki",
                 DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque"}
     for slot, name in (launch if kind == "launch" else baseline).items():
@@ -937,6 +1002,10 @@ def pack(kind: str, s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pres
     if temps.size != N_FILL_T or fill.size != N_FILL_T:
         raise ValueError(f"the feedforward and fill tables take {N_FILL_T} oil temperatures")
     r[FILL_T:FILL_T + N_FILL_T] = fill
+    if kind == "launch":
+        n = min(max(round(s["ref_rise"] / dt), 1), N_REF_W)
+        r[REF_N] = n
+        r[REF_W:REF_W + n] = ref_weights(n)
     r[MU2:MU0 + 1] = 0.0
     r[MU0 + 1 - len(mu):MU0 + 1] = mu
     r[FF_T0], r[FF_DT], r[FF_NT] = temps[0], temps[1] - temps[0], temps.size

@@ -55,7 +55,7 @@ _P = (0.0, 5e6)
 LAUNCH_DEFAULTS = {
     "hold_offset": 0.0, "fill_exit": 0.1e5, "fill_exit_cold": 0.05e5, "hold_rate": 1.0e5, "hold_lead": 0.01e5,
     "req_lead": 0.3e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kd_p": 1.0e-8, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
-    "ki_t": 3.9, "tau_ref": 0.03, "tau_theta": 0.05, "theta0": 1.0, "dither_amp": 0.05, "dither_hz": 125.0,
+    "ki_t": 3.9, "tau_ref": 0.03, "ref_rise": 0.18, "tau_theta": 0.05, "theta0": 1.0, "dither_amp": 0.05, "dither_hz": 125.0,
     "dither_amp_torque": 0.35, "dither_hz_torque": 166.7, "dither_hz_high": 250.0, "dither_high_above": 1.0e5,
     "ff_shift_torque": 1.0, "dip": 0.5, "dip_time": 0.015,
     "creep_limit": 10.0, "trapped_dip": 0.2,
@@ -65,8 +65,9 @@ LAUNCH_DEFAULTS = {
 #: (:mod:`wetclutch.launch.margins`) and a sweep, ``kd_p``, ``tau_ref``, ``hold_offset`` and the torque dither's
 #: frequency and amplitude from sweeps (600 to 800 plants of the shipped ranges, three or four seeds, three launches
 #: each), ``dither_hz_high``, ``dither_high_above`` and ``req_lead`` from sweeps over three plants (the default rig
-#: and two changed clutches, 364 plants of the shipped ranges each, three launches); the rest were set by hand on
-#: the default rig
+#: and two changed clutches, 364 plants of the shipped ranges each, three launches), ``ref_rise`` from a sweep of
+#: 0.165 to 0.195 s (the S-curve on every launch) over the default rig with a clutch output 3.67 times its own (300
+#: plants, first launches); the rest were set by hand on the default rig
 TUNED = ("kp_p", "ki_p", "ki_t")
 #: the baseline's settings that are not derived from the plant
 BASELINE_DEFAULTS = {"hold_offset": 0.05e5, "dip": 0.5, "dip_time": 0.015, "dither_amp_torque": 0.3,
@@ -86,6 +87,8 @@ PLANT_SETTINGS = {
     "valve_play": Setting("V", 0.0, 5.0, "the magnet's hysteresis play as input voltage, I_hyst / g_current"),
     "stroke_span": Setting("Pa", 0.0, 5e6, "pressure rise over the piston's stroke, from the prestress to the kiss point"),
     "j_1": Setting("kg m^2", 0.0, 1.0, "clutch output inertia the friction-factor estimate starts from (a launch measures it)"),
+    "k_a": Setting("N m/rad", 0.0, 1e8, "axle stiffness: with j_1 and the ratio, whether the clutch output rings against it"),
+    "d_a": Setting("N m s/rad", 0.0, 1e5, "axle damping: with j_1 and the ratio, whether the clutch output rings"),
 }
 #: every setting of each controller kind
 SETTINGS: dict[str, dict[str, Setting]] = {
@@ -105,6 +108,8 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "kp_t": Setting("-", 0.0, 100.0, "torque loop, proportional gain (per nominal pressure per N m)"),
         "ki_t": Setting("1/s", 0.0, 1e4, "torque loop, integral gain (per nominal pressure per N m)"),
         "tau_ref": Setting("s", 0.0, 10.0, "time constant of each of the request prefilter's two stages"),
+        "ref_rise": Setting("s", 0.0, 1.0, "rise time of the request's S-curve (a raised cosine), taken instead of the two "
+                                           "stages where the clutch output rings against the axle"),
         "tau_theta": Setting("s", 0.0, 10.0, "time constant of the friction-factor estimate"),
         "theta0": Setting("-", 0.1, 10.0, "friction factor assumed until it is measured"),
         "dither_amp": Setting("V", 0.0, 5.0, "dither amplitude before the request"),
@@ -346,6 +351,8 @@ def plant_settings(plant: Params, origin: dict[str, str] | None = None) -> dict[
                         "k_reset x_contact / A_p"),
     }
     plant_values["j_1"] = (d.J_1, f"plant ({_origin(origin, 'driveline.J_1')}): driveline.J_1")
+    plant_values["k_a"] = (d.k_a, f"plant ({_origin(origin, 'driveline.k_a')}): driveline.k_a")
+    plant_values["d_a"] = (d.d_a, f"plant ({_origin(origin, 'driveline.d_a')}): driveline.d_a")
     mu_src = (f"plant ({_origin(origin, 'friction.mu_slip_poly', 'friction.mu_scale', 'friction.mu_slope')}): "
               "mu_slip_poly x mu_scale, turned by mu_slope")
     for name, value in zip(("mu2", "mu1", "mu0"), mu):
