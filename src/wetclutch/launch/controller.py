@@ -542,7 +542,7 @@ def _shaped(ctrl, cs, x):
 
     Where the clutch output rings against the axle (:func:`_rings`), the two first-order stages' steepest slope,
     at their start, excites the ring, and their tail keeps feeding it: the raised cosine of about the same 10-90 %
-    rise (0.18 s against two stages of 30 ms) is steepest in its middle, a third less steep, and stops. On the
+    rise (0.18 s against two stages of 30 ms) is steepest in its middle, 30 % less steep, and stops. On the
     built-in rig with a clutch output of 3.67 g m^2, the ranges' x1-10 on top (300 samples, seed 7, three launches;
     the output rings where it is heavy and the ratio low), 91.7 / 97.7 % of first / last launches passed against
     84.3 / 93.7 % with the two stages throughout. Where the output does not ring the two stages stay: with the
