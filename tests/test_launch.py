@@ -202,6 +202,8 @@ def test_the_requests_s_curve_is_the_raised_cosine_of_a_step():
     assert m == round(designs.cached(Params()).settings["ref_rise"] / 1e-3)
     assert out[:m] == pytest.approx(50.0 * np.cumsum(control.ref_weights(m)), rel=1e-12)
     assert out[m:] == pytest.approx([50.0] * 20, rel=1e-12)
+    # at the shortest sample time the whole curve fits (not cut short)
+    assert designs.record(designs.cached(Params()), 1e-4)[control.REF_N] == 10 * m
 
 
 @pytest.mark.parametrize("j_1, ratio", [(0.001, 0.4), (0.001, 1.0), (0.02, 0.45), (0.004, 0.5), (0.004, 0.6)])

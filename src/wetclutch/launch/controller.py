@@ -174,10 +174,10 @@ KP_B, KI_B = 52, 53
 FILL_T = 54
 N_FILL_T = 5
 #: the request's S-curve (:func:`ref_weights`): its length in samples, then its weights (N_REF_W slots, the unused
-#: ones zero)
+#: ones zero: the longest ``ref_rise`` at the shortest sample time, 0.5 s at 0.1 ms)
 REF_N = FILL_T + N_FILL_T
 REF_W = REF_N + 1
-N_REF_W = 1024
+N_REF_W = 5000
 FF_TABLE = REF_W + N_REF_W  # start of the (nt, np) table of input voltage vs (oil temperature, pressure)
 N_MU = 3  # MU2, MU1, MU0: the friction law's quadratic mu(slip), highest power first
 
@@ -1003,7 +1003,9 @@ def pack(kind: str, s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pres
         raise ValueError(f"the feedforward and fill tables take {N_FILL_T} oil temperatures")
     r[FILL_T:FILL_T + N_FILL_T] = fill
     if kind == "launch":
-        n = min(max(round(s["ref_rise"] / dt), 1), N_REF_W)
+        n = max(round(s["ref_rise"] / dt), 1)
+        if n > N_REF_W:
+            raise ValueError(f"ref_rise {s['ref_rise']} s is {n} samples of {dt} s, more than {N_REF_W}")
         r[REF_N] = n
         r[REF_W:REF_W + n] = ref_weights(n)
     r[MU2:MU0 + 1] = 0.0

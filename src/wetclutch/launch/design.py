@@ -108,7 +108,7 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "kp_t": Setting("-", 0.0, 100.0, "torque loop, proportional gain (per nominal pressure per N m)"),
         "ki_t": Setting("1/s", 0.0, 1e4, "torque loop, integral gain (per nominal pressure per N m)"),
         "tau_ref": Setting("s", 0.0, 10.0, "time constant of each of the request prefilter's two stages"),
-        "ref_rise": Setting("s", 0.0, 1.0, "rise time of the request's S-curve (a raised cosine), taken instead of the two "
+        "ref_rise": Setting("s", 0.0, 0.5, "rise time of the request's S-curve (a raised cosine), taken instead of the two "
                                            "stages where the clutch output rings against the axle"),
         "tau_theta": Setting("s", 0.0, 10.0, "time constant of the friction-factor estimate"),
         "theta0": Setting("-", 0.1, 10.0, "friction factor assumed until it is measured"),
