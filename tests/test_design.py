@@ -15,7 +15,7 @@ from wetclutch.launch import design as designs
 from wetclutch.launch import ranges
 from wetclutch.launch import settings as files
 from wetclutch.params import Params, load
-from wetclutch.physics import friction
+from wetclutch.physics import friction, oil
 
 
 @pytest.fixture(scope="module")
@@ -35,6 +35,31 @@ def test_the_design_takes_the_plants_kiss_point_ratio_and_friction(plant):
     assert d.settings["ratio"] == 0.7
     assert d.settings["mu0"] == pytest.approx(2.6e-2 * 1.1)
     assert "identified" in d.sources["p_kiss"] and "default" in d.sources["p_kiss"]
+
+
+def test_the_rate_gain_feeds_back_the_same_flow_where_the_oil_is_stiffer():
+    # Merritt's oil with entrained air, isothermal: air volume x0 p_atm / p_abs per atmospheric volume, and
+    # 1/K_eff = (1 - x)/K_oil + x/p_abs with x the air's share of the volume
+    p_atm, x0 = 101325.0, 0.005
+    k_oil = oil.bulk_modulus(designs.RATE_GAIN_TEMP_C, air_fraction=0.0)
+
+    def compliance(p):
+        v = x0 * p_atm / (p_atm + p)
+        x = v / (v + 1.0 - x0)
+        return (1.0 - x) / k_oil + x / (p_atm + p)
+
+    ref = Params()
+    p_ref = ref.hydraulics.p_prestress + ref.hydraulics.k_reset * ref.hydraulics.x_contact / ref.hydraulics.A_p
+    high = load(overrides={"hydraulics.p_prestress": 1.8e5, "hydraulics.air_fraction": x0})
+    d = designs.design(high, "launch")
+    share = compliance(d.settings["p_kiss"]) / compliance(p_ref)
+    assert d.settings["kd_p"] == pytest.approx(designs.LAUNCH_DEFAULTS["kd_p"] * share, rel=1e-9)
+    # air alone would make it the square of the absolute pressures' ratio; the oil's own compliance a little more
+    assert ((p_atm + p_ref) / (p_atm + d.settings["p_kiss"])) ** 2 < share < 0.5
+    assert "compliance" in d.sources["kd_p"]
+    # the default rig and lower kiss points keep the default
+    for p in (ref, load(overrides={"hydraulics.p_prestress": 0.2e5})):
+        assert designs.design(p, "launch").settings["kd_p"] == designs.LAUNCH_DEFAULTS["kd_p"]
 
 
 def test_friction_curve_slope_keeps_the_mean_over_the_slip_span():

@@ -12,7 +12,9 @@ typically ``wetclutch identify``'s ``params.toml``):
   PI gains follow the SIMC rule on a first-order-plus-dead-time fit of the torque's
   step response (:func:`baseline_gains`);
 * the launch controller's gains and timings are the settings it was developed with
-  (:data:`LAUNCH_DEFAULTS`), the same for every plant.
+  (:data:`LAUNCH_DEFAULTS`), the same for every plant, but for the pressure loop's rate gain
+  ``kd_p``, which is scaled by the oil's compliance at the plant's kiss point
+  (:func:`rate_gain_share`).
 
 :func:`design` returns a :class:`Design`; :func:`record` packs it for the compiled
 controller; :mod:`wetclutch.launch.settings` reads and writes it as a controller file.
@@ -31,7 +33,7 @@ import numpy as np
 
 from ..errors import WetclutchError
 from ..params import Params, flatten
-from ..physics import actuator, friction
+from ..physics import actuator, friction, oil
 from ..plant import clutch
 from ..rig.experiments import INPUT_RANGE
 from ..sim.signals import Table
@@ -69,6 +71,8 @@ LAUNCH_DEFAULTS = {
 #: 0.165 to 0.195 s (the S-curve on every launch) over the default rig with a clutch output 3.67 times its own (300
 #: plants, first launches); the rest were set by hand on the default rig
 TUNED = ("kp_p", "ki_p", "ki_t")
+#: oil temperature (C) at which :func:`rate_gain_share` compares the oil's compliances (the share hardly depends on it)
+RATE_GAIN_TEMP_C = 60.0
 #: the baseline's settings that are not derived from the plant
 BASELINE_DEFAULTS = {"hold_offset": 0.05e5, "dip": 0.5, "dip_time": 0.015, "dither_amp_torque": 0.3,
                      "dither_hz_torque": 125.0}
@@ -360,6 +364,25 @@ def plant_settings(plant: Params, origin: dict[str, str] | None = None) -> dict[
     return plant_values
 
 
+def rate_gain_share(plant: Params) -> float:
+    """The share of the default ``kd_p`` that a design for ``plant`` takes: the clutch oil's compliance at the
+    plant's kiss point over that at the default rig's kiss point (where ``kd_p`` was swept), at most 1.
+
+    ``kd_p`` feeds back the pressure's rate, which is the flow into the clutch over the oil's compliance
+    ``1/K_eff``; with entrained air that compliance falls about as the square of the absolute pressure
+    (:func:`wetclutch.physics.oil.bulk_modulus`). A clutch whose kiss point is higher works at higher pressures
+    throughout its launch, where the same gain on the rate is a larger gain on the flow: it damped the valve's
+    loop so much that the torque rose late and overshot (clutches with kiss points near 2 bar). Scaled by the
+    compliance, the gain feeds back the same flow. Lower kiss points keep the default: more damping there was
+    not measured to help.
+    """
+    air = plant.hydraulics.air_fraction
+    k_ref, k_kiss = oil.bulk_modulus(RATE_GAIN_TEMP_C, np.array([actuator.contact_pressure(Params()),
+                                                                 actuator.contact_pressure(plant)]),
+                                     air_fraction=air)
+    return float(min(k_ref / k_kiss, 1.0))
+
+
 def design(plant: Params, kind: str = "launch", origin: dict[str, str] | None = None) -> Design:
     """Design controller ``kind`` for ``plant``.
 
@@ -384,6 +407,12 @@ def design(plant: Params, kind: str = "launch", origin: dict[str, str] | None = 
         sources = {k: src for k, (_, src) in plant_values.items()}
         sources |= {k: "controller default" + (" (tuned on the default rig's ranges)" if k in TUNED else "")
                     for k in LAUNCH_DEFAULTS}
+        share = rate_gain_share(plant)
+        if share < 1.0:
+            settings["kd_p"] = LAUNCH_DEFAULTS["kd_p"] * share
+            sources["kd_p"] = (f"controller default x {share:.3f}: the oil's compliance at the kiss point (p_kiss) over "
+                               f"that at the default rig's ({RATE_GAIN_TEMP_C:g} C, air fraction "
+                               f"{plant.hydraulics.air_fraction:g}: {_origin(origin, 'hydraulics.air_fraction')})")
         return Design(kind, plant, settings, sources | {"input_V": map_src}, MAP_TEMPS.copy(), MAP_PRESSURES.copy(),
                       table)
     fill = _fill_times_cached(_sections_key(plant, ("valve", "hydraulics", "friction", "driveline")))
