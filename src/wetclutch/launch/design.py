@@ -53,7 +53,8 @@ class Setting:
 
 
 _P = (0.0, 5e6)
-#: the launch controller's settings that every plant shares, with their values
+#: the launch controller's settings that every plant shares, with their values (``kd_p`` scaled per plant by
+#: :func:`rate_gain_share`)
 LAUNCH_DEFAULTS = {
     "hold_offset": 0.0, "fill_exit": 0.1e5, "fill_exit_cold": 0.05e5, "hold_rate": 1.0e5, "hold_lead": 0.01e5,
     "req_lead": 0.3e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kd_p": 1.0e-8, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
