@@ -62,6 +62,23 @@ def test_the_rate_gain_feeds_back_the_same_flow_where_the_oil_is_stiffer():
         assert designs.design(p, "launch").settings["kd_p"] == designs.LAUNCH_DEFAULTS["kd_p"]
 
 
+def test_the_high_dither_starts_at_the_default_rigs_absolute_pressure():
+    def kiss(p):
+        h = p.hydraulics
+        return h.p_prestress + h.k_reset * h.x_contact / h.A_p
+
+    default = designs.LAUNCH_DEFAULTS["dither_high_above"]
+    start = kiss(Params()) + default  # gauge pressure from which the default rig's torque dither is the high one
+    for prestress in (0.2e5, 0.5e5, 0.9e5, 1.3e5, 1.8e5, 2.5e5):
+        p = load(overrides={"hydraulics.p_prestress": prestress})
+        above = designs.design(p, "launch").settings["dither_high_above"]
+        if kiss(p) <= kiss(Params()):
+            assert above == default
+        else:
+            assert above == pytest.approx(max(start - kiss(p), 0.0), abs=1e-6)
+    assert designs.design(load(overrides={"hydraulics.p_prestress": 1.8e5}), "launch").settings["dither_high_above"] == 0.0
+
+
 def test_friction_curve_slope_keeps_the_mean_over_the_slip_span():
     poly = [-1.7e-6, 2.7e-4, 2.6e-2]
     w = np.linspace(0.0, 150.0, 30001)

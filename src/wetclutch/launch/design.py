@@ -12,9 +12,11 @@ typically ``wetclutch identify``'s ``params.toml``):
   PI gains follow the SIMC rule on a first-order-plus-dead-time fit of the torque's
   step response (:func:`baseline_gains`);
 * the launch controller's gains and timings are the settings it was developed with
-  (:data:`LAUNCH_DEFAULTS`), the same for every plant, but for the pressure loop's rate gain
-  ``kd_p``, which is scaled by the oil's compliance at the plant's kiss point
-  (:func:`rate_gain_share`).
+  (:data:`LAUNCH_DEFAULTS`), the same for every plant, but for two that follow the oil's
+  stiffness, which entrained air makes depend on the absolute pressure: the pressure loop's
+  rate gain ``kd_p`` is scaled by the oil's compliance at the plant's kiss point
+  (:func:`rate_gain_share`), and the torque dither takes its high frequency from the same
+  absolute pressure as on the default rig (:func:`high_dither_above`).
 
 :func:`design` returns a :class:`Design`; :func:`record` packs it for the compiled
 controller; :mod:`wetclutch.launch.settings` reads and writes it as a controller file.
@@ -53,8 +55,8 @@ class Setting:
 
 
 _P = (0.0, 5e6)
-#: the launch controller's settings that every plant shares, with their values (``kd_p`` scaled per plant by
-#: :func:`rate_gain_share`)
+#: the launch controller's settings that every plant shares, with their values (``kd_p`` and ``dither_high_above``
+#: set per plant by :func:`rate_gain_share` and :func:`high_dither_above`)
 LAUNCH_DEFAULTS = {
     "hold_offset": 0.0, "fill_exit": 0.1e5, "fill_exit_cold": 0.05e5, "hold_rate": 1.0e5, "hold_lead": 0.01e5,
     "req_lead": 0.3e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kd_p": 1.0e-8, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
@@ -384,6 +386,20 @@ def rate_gain_share(plant: Params) -> float:
     return float(min(k_ref / k_kiss, 1.0))
 
 
+def high_dither_above(plant: Params) -> float:
+    """``dither_high_above`` for ``plant`` (Pa): the torque dither's high frequency from the same absolute pressure
+    as on the default rig, its kiss point plus the default ``dither_high_above``, and from the kiss point on where the
+    plant's kiss point is higher than that; a kiss point lower than the default rig's keeps the default.
+
+    High in the pressure range the oil is stiff (entrained air compressed), the valve stem rings in a sawtooth about
+    the slower dither, and the clutch volume filters the dither less: with a kiss point near 2 bar the slower dither
+    made the pressure swing by 0.3 bar at small requests, a third of their torque. The stiffness follows the
+    absolute pressure, not the pressure above the kiss point.
+    """
+    higher = max(actuator.contact_pressure(plant) - actuator.contact_pressure(Params()), 0.0)
+    return float(max(LAUNCH_DEFAULTS["dither_high_above"] - higher, 0.0))
+
+
 def design(plant: Params, kind: str = "launch", origin: dict[str, str] | None = None) -> Design:
     """Design controller ``kind`` for ``plant``.
 
@@ -408,6 +424,12 @@ def design(plant: Params, kind: str = "launch", origin: dict[str, str] | None = 
         sources = {k: src for k, (_, src) in plant_values.items()}
         sources |= {k: "controller default" + (" (tuned on the default rig's ranges)" if k in TUNED else "")
                     for k in LAUNCH_DEFAULTS}
+        above = high_dither_above(plant)
+        if above < LAUNCH_DEFAULTS["dither_high_above"]:
+            settings["dither_high_above"] = above
+            sources["dither_high_above"] = (f"the default rig's kiss point + {LAUNCH_DEFAULTS['dither_high_above']:g} "
+                                            "Pa - p_kiss, at least 0: the high dither from the same absolute pressure "
+                                            "as there (the oil as stiff)")
         share = rate_gain_share(plant)
         if share < 1.0:
             settings["kd_p"] = LAUNCH_DEFAULTS["kd_p"] * share
