@@ -367,6 +367,12 @@ def plant_settings(plant: Params, origin: dict[str, str] | None = None) -> dict[
     return plant_values
 
 
+@functools.lru_cache(maxsize=1)
+def _default_kiss() -> float:
+    """The default rig's kiss point (Pa), the reference of the rules that follow the oil's stiffness."""
+    return actuator.contact_pressure(Params())
+
+
 def rate_gain_share(plant: Params) -> float:
     """The share of the default ``kd_p`` that a design for ``plant`` takes: the clutch oil's compliance at the
     plant's kiss point over that at the default rig's kiss point (where ``kd_p`` was swept), at most 1.
@@ -380,8 +386,7 @@ def rate_gain_share(plant: Params) -> float:
     not measured to help.
     """
     air = plant.hydraulics.air_fraction
-    k_ref, k_kiss = oil.bulk_modulus(RATE_GAIN_TEMP_C, np.array([actuator.contact_pressure(Params()),
-                                                                 actuator.contact_pressure(plant)]),
+    k_ref, k_kiss = oil.bulk_modulus(RATE_GAIN_TEMP_C, np.array([_default_kiss(), actuator.contact_pressure(plant)]),
                                      air_fraction=air)
     return float(min(k_ref / k_kiss, 1.0))
 
@@ -396,7 +401,7 @@ def high_dither_above(plant: Params) -> float:
     made the pressure swing by 0.3 bar at small requests, a third of their torque. The stiffness follows the
     absolute pressure, not the pressure above the kiss point.
     """
-    higher = max(actuator.contact_pressure(plant) - actuator.contact_pressure(Params()), 0.0)
+    higher = max(actuator.contact_pressure(plant) - _default_kiss(), 0.0)
     return float(max(LAUNCH_DEFAULTS["dither_high_above"] - higher, 0.0))
 
 
