@@ -132,6 +132,55 @@ def test_the_friction_curve_falling_with_slip_is_judder_the_loop_cannot_damp():
     assert float(np.real(margins.driveline(Params(), 100.0).poles()).max()) < 0.0
 
 
+def test_mcnemars_exact_test_is_the_binomial_tail_of_the_discordant_plants():
+    from math import comb
+
+    start = [True] * 10 + [False] * 8 + [True, False]
+    # the candidate passes 7 of the plants the start fails and fails 1 it passes: P(X >= 7), X ~ binomial(8, 1/2)
+    cand = [True] * 10 + [True] * 7 + [False] + [False, False]
+    b, c, p = tune.against_start(cand, start)
+    assert (b, c) == (7, 1)
+    assert p == pytest.approx(sum(comb(8, k) for k in (7, 8)) / 2**8, rel=1e-12)
+    assert tune.against_start(start, start) == (0, 0, 1.0)
+    assert tune.against_start(cand[:-1] + [True], cand) == (1, 0, pytest.approx(0.5))  # one plant apart
+    with pytest.raises(ValueError, match="same plants"):
+        tune.against_start(cand[:-1], start)
+
+
+def _verified_by_kp(start, passes):
+    """A stand-in for the verification of the finalists: the pass/fail of each plant by the design's ``kp``
+    relative to the start's (1, 2 or 0.5), the same for the training and the validation plants."""
+    def verified(design, n, seed):
+        ok = passes[round(design.settings["kp"] / start.settings["kp"], 6)][:n]
+        return {"results": [{"all_pass": x, "metrics": {}} for x in ok], "pass_rate": sum(ok) / n}
+    return verified
+
+
+@pytest.mark.parametrize("case", ["significant", "a lucky few"])
+def test_a_candidate_replaces_the_start_only_if_it_passes_significantly_more_plants(case):
+    start = designs.cached(Params(), "baseline")
+    names = tune.TUNABLE["baseline"]
+    base = [True] * 30 + [False] * 10
+    if case == "significant":  # kp x2 passes 8 plants more, fails none the start passes
+        better = [True] * 38 + [False] * 2
+    else:  # kp x2 passes 3 plants more and fails 1 the start passes: a higher pass rate, no evidence
+        better = [False] + [True] * 29 + [True] * 3 + [False] * 7
+    worse = [True] * 25 + [False] * 15
+    t = tune.Tuning(start, start, names, best_x=np.array([np.log(2.0), 0.0]))
+    t.start_training = (1.0, 0.75)
+    t.best_score, t.best_rate = 0.5, 0.9
+    tune._choose(t, np.array([-np.log(2.0), 0.0]), _verified_by_kp(start, {1.0: base, 2.0: better, 0.5: worse}), 20, 0)
+    assert set(t.finalists) == {"start", "best on training", "search mean"}
+    assert t.finalists["best on training"][2] < t.finalists["start"][2]  # it scores lower either way
+    if case == "significant":
+        assert t.tests["best on training"][:2] == (8, 0) and t.chosen == "best on training"
+        assert t.design.settings["kp"] == pytest.approx(2.0 * start.settings["kp"])
+    else:
+        assert t.tests["best on training"][:2] == (3, 1) and t.chosen == "start"
+        assert t.design is start
+    assert t.tests["search mean"][2] == 1.0  # passes no plant the start fails
+
+
 def test_tune_command_writes_the_finalists_and_keeps_the_design_unless_beaten(tmp_path):
     import json
 
@@ -143,8 +192,10 @@ def test_tune_command_writes_the_finalists_and_keeps_the_design_unless_beaten(tm
                  "--heldout-samples", "2", "--sequence", "1", "--quiet", "--out", str(out)]) == 0
     info = json.loads((out / "tune.json").read_text())
     fin = info["finalists"]
-    # the chosen finalist scores best on the validation plants; the written controller is that finalist
-    assert fin[info["chosen"]]["validation_score"] == min(v["validation_score"] for v in fin.values())
+    # a candidate is chosen only if it scores below the start and passes significantly more validation plants
+    if info["chosen"] != "start":
+        assert fin[info["chosen"]]["validation_score"] < fin["start"]["validation_score"]
+        assert fin[info["chosen"]]["p_value"] < tune.SIGNIFICANCE
     written = settings.load(out / "controller.toml")
     start = designs.cached(Params(), "baseline")
     names = tune.TUNABLE["baseline"]

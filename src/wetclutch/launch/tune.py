@@ -19,8 +19,13 @@ plants, one plant more or less that passes moves the pass rate by some percent, 
 picks the luckiest candidate). The search therefore ends with a choice among finalists on
 plants it has not seen: the start, the best candidate on the training plants and the search
 distribution's mean are verified on :data:`VALIDATION_FACTOR` times as many validation plants
-(drawn with ``seed + 1``), and the one that scores best there is the tuned design; the start
-is kept unless a candidate beats it. The tuned design is then verified on a held-out set drawn
+(drawn with ``seed + 1``, the same plants for each). A lower validation score alone is not
+enough either: a candidate replaces the start only if it also passes significantly more of the
+validation plants. The finalists are compared plant by plant (McNemar's exact test): of the
+plants on which the two differ, ``b`` pass only with the candidate and ``c`` only with the start,
+and under "no better than the start" ``b`` is at most binomial(``b + c``, 1/2); the candidate
+qualifies if ``P(X >= b) <`` :data:`SIGNIFICANCE`. The tuned design is the qualifying candidate
+with the lowest validation score, else the start. It is then verified on a held-out set drawn
 with yet another seed, beside the untuned one (the command line's ``tune``). Both kinds are
 tuned the same way, so the comparison with the baseline stays fair.
 
@@ -38,6 +43,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.stats import binomtest
 
 from ..errors import WetclutchError
 from ..params import Params
@@ -54,6 +60,8 @@ TAIL = 0.1
 TAIL_WEIGHT = 0.03
 #: validation plants per training plant (the finalists' choice)
 VALIDATION_FACTOR = 2
+#: a candidate replaces the start only if it passes more validation plants at this significance (one-sided)
+SIGNIFICANCE = 0.05
 
 
 def badness(r: dict[str, Any]) -> float:
@@ -91,7 +99,21 @@ class Tuning:
     start_training: tuple[float, float] = (math.inf, float("nan"))
     #: each finalist's (training score, training pass rate, validation score, validation pass rate)
     finalists: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+    #: each candidate against the start on the validation plants (:func:`against_start`)
+    tests: dict[str, tuple[int, int, float]] = field(default_factory=dict)
     chosen: str = "start"
+
+
+def against_start(candidate: list[bool], start: list[bool]) -> tuple[int, int, float]:
+    """McNemar's exact test of a candidate against the start on the same plants (pass or fail on each):
+    ``(b, c, p)``, ``b`` the plants only the candidate passes, ``c`` those only the start passes, and ``p`` the
+    one-sided probability of ``b`` or more of the ``b + c`` were the candidate no better (binomial, 1/2)."""
+    if len(candidate) != len(start):
+        raise ValueError("the candidate and the start must be verified on the same plants")
+    b = sum(1 for x, y in zip(candidate, start) if x and not y)
+    c = sum(1 for x, y in zip(candidate, start) if y and not x)
+    p = float(binomtest(b, b + c, 0.5, alternative="greater").pvalue) if b + c > 0 else 1.0
+    return b, c, p
 
 
 def check_options(samples: int, generations: int, popsize: int) -> None:
@@ -176,8 +198,9 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
         return tuning
     sources = {n: f"tuned: CMA-ES on {samples} training plants (seed {seed}, {sequence} launches each), chosen on "
                   f"{VALIDATION_FACTOR * samples} validation plants (seed {seed + 1}), validation score "
-                  f"{tuning.finalists[tuning.chosen][2]:.3f} against the start's {tuning.finalists['start'][2]:.3f}"
-               for n in names}
+                  f"{tuning.finalists[tuning.chosen][2]:.3f} against the start's {tuning.finalists['start'][2]:.3f}, "
+                  f"passing {b} plants the start fails and failing {c} it passes (p = {pv:.3g})"
+               for n in names for b, c, pv in [tuning.tests[tuning.chosen]]}
     tuning.design = Design(chosen.kind, chosen.plant, chosen.settings, chosen.sources | sources, chosen.temps_C,
                            chosen.pressures_Pa, chosen.input_V, chosen.fill_s)
     return tuning
@@ -185,10 +208,13 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
 
 def _choose(tuning: Tuning, mean: np.ndarray, verified: Callable[[Design, int, int], dict[str, Any]], samples: int,
             seed: int) -> None:
-    """Choose among the finalists (start, best on training, the search's mean) on the validation plants."""
+    """Choose among the finalists (start, best on training, the search's mean) on the validation plants: the
+    candidate with the lowest validation score among those that pass significantly more of them than the start
+    (:func:`against_start`), else the start."""
     start, names = tuning.start, tuning.names
     xs = {"start": np.zeros(len(names)), "best on training": tuning.best_x, "search mean": mean}
     finalists: dict[str, tuple[float, float, float, float]] = {}
+    passes: dict[str, list[bool]] = {}
     seen: list[np.ndarray] = []
     for name, x in xs.items():
         if any(np.array_equal(x, y) for y in seen):
@@ -204,8 +230,11 @@ def _choose(tuning: Tuning, mean: np.ndarray, verified: Callable[[Design, int, i
             train = (score(res), res["pass_rate"])
         val = verified(design, VALIDATION_FACTOR * samples, seed + 1)
         finalists[name] = (*train, score(val), val["pass_rate"])
-    # ties keep the earlier finalist: the start before any candidate
-    tuning.chosen = min(finalists, key=lambda k: finalists[k][2])
+        passes[name] = [bool(r["all_pass"]) for r in val["results"]]
+    tuning.tests = {k: against_start(passes[k], passes["start"]) for k in finalists if k != "start"}
+    qualified = [k for k, (_, _, p) in tuning.tests.items()
+                 if p < SIGNIFICANCE and finalists[k][2] < finalists["start"][2]]
+    tuning.chosen = min(qualified, key=lambda k: finalists[k][2]) if qualified else "start"
     tuning.finalists = finalists
     tuning.design = _candidate(start, names, xs[tuning.chosen]) if tuning.chosen != "start" else start
     tuning.best_score, tuning.best_rate = finalists[tuning.chosen][:2]
