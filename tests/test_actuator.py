@@ -179,6 +179,24 @@ def test_magnetising_current_lags_by_the_play():
     assert np.ptp(i_m[hold]) < 1e-6 and np.mean(i_m[hold] - cur[hold]) == pytest.approx(0.05, rel=0.05)
 
 
+@pytest.mark.parametrize("n", [2, 5, 8, 32])
+def test_the_smoothed_play_follows_its_closed_form_on_a_rising_current(n):
+    """On a current that only rises, the play is rate-independent: the lag ``z = (I - I_m) / I_hyst`` obeys
+    ``dz/dxi = 1 - z^n`` in ``xi = (I - I_0) / I_hyst``, so ``xi(z) = integral_0^z dv / (1 - v^n)``."""
+    r = 0.05
+    p = wc.load_params(overrides={"valve.I_hyst": r, "valve.play_exponent": n})
+    u = Table([0.0, 0.5, 2.5, 3.0], [0.0, 0.0, 4.0, 4.0], kinks_are_breakpoints=True)
+    rn = clutch.build(p, u, config="valve-only")
+    tr = integrate(rn.network, 2.5, dt_out=1e-3)
+    cur, i_m = tr.x[:, rn.i_current], tr.x[:, rn.i_current + A.MAGNETISATION]
+    assert np.all(np.diff(cur[tr.t > 0.5]) > 0.0)  # the closed form holds for a current that only rises
+    z, xi = (cur - i_m) / r, cur / r
+    pick = (z > 0.2) & (z < 0.97)
+    assert pick.sum() > 20
+    want = np.array([quad(lambda v: 1.0 / (1.0 - v**n), 0.0, zi)[0] for zi in z[pick]])
+    assert np.allclose(xi[pick], want, rtol=1e-5, atol=1e-6)
+
+
 def test_valve_staircase_shows_the_magnetic_hysteresis_under_pwm():
     """Up and down staircases differ visibly (the PWM ripple does not dither the play out); none without it."""
     d = np.array([0.1, 0.2, 0.3])  # the top step is the turning point: compare the two below it

@@ -42,6 +42,8 @@ def test_export_loads_back_identically(tmp_path):
         ({"driveline": 3.0}, "'driveline' is a section"),
         ({"friction.mu_slip_poly": [float("nan")]}, "friction.mu_slip_poly.0"),
         ({"friction.mu_slip_poly": [1e-3, float("inf")]}, "friction.mu_slip_poly.1"),
+        ({"valve.play_exponent": 7.5}, "parameter 'valve.play_exponent': must be a whole number (got 7.5)"),
+        ({"valve.play_exponent": 0.0}, "valve.play_exponent"),
     ],
 )
 def test_bad_values_name_the_field(override, fragment):

@@ -45,9 +45,10 @@ Magnet (the study: "friction of the magnet causes hysteresis", and "no simple mo
 known" for the force): the force follows the magnetisation of the iron, which lags
 the coil current by a play (backlash, Prandtl) of half-width ``I_hyst``: ``I_m``
 stays put while ``|I - I_m| < I_hyst`` and is dragged along at that distance
-beyond. The play is smoothed as a Duhem model, ``dI_m/dt = dI/dt * min(z, 1)^8`` with
-``z = (I - I_m) sign(dI/dt) / I_hyst`` (0 when negative), so it needs no events; the
-steep power keeps ``I_m`` nearly still inside the play, and the lag settles at
+beyond. The play is smoothed as a Duhem model, ``dI_m/dt = dI/dt * min(z, 1)^n`` with
+``z = (I - I_m) sign(dI/dt) / I_hyst`` (0 when negative) and ``n`` = ``valve.play_exponent`` (8), so it
+needs no events; the steep power keeps ``I_m`` nearly still inside the play (a larger ``n``: a sharper play,
+the ideal one as ``n`` grows), and the lag settles at
 ``I_hyst`` while the current keeps moving one way. A PWM ripple smaller than the
 play wears the lag down only slowly (the iron sees minor loops), so unlike the
 stem's Coulomb friction, which the ripple dithers out, this hysteresis stays
@@ -116,8 +117,9 @@ from . import friction, oil
     FB_DAMP,  # damping orifice into the stem's feedback chamber, m^3/(s Pa^0.5); 0: the chamber sees p
     FB_GAP,  # laminar clearance of the stem's guide out of the feedback chamber, m^3/(s Pa)
     FB_TURB,  # damping orifice and the guide's vent bore in series (turbulent part of the path), m^3/(s Pa^0.5)
+    PLAY_N,  # exponent of the smoothed play (a whole number >= 1)
     N_ACT,
-) = range(46)
+) = range(47)
 
 DC, PWM = 0, 1
 #: modes of the DC amplifier's output stage
@@ -198,17 +200,30 @@ def magnet_force(i_m, act):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def play_rate(cur, cur_dot, i_m, r):
-    """dI_m/dt of the smoothed play (Duhem form, see the module docstring) of half-width ``r`` > 0."""
+def play_rate(cur, cur_dot, i_m, r, n):
+    """dI_m/dt of the smoothed play (Duhem form, see the module docstring) of half-width ``r`` > 0 and exponent
+    ``n`` (a whole number >= 1)."""
     z = (cur - i_m if cur_dot > 0.0 else i_m - cur) * (1.0 / r)
     if z <= 0.0:
         return 0.0
     # I_m never outruns I: capping keeps the rate bounded even where a trial stage of the
-    # explicit integrator overshoots the play (an uncapped z^8 runs away there)
+    # explicit integrator overshoots the play (an uncapped z^n runs away there)
     z = min(z, 1.0)
-    z2 = z * z
-    z4 = z2 * z2
-    return cur_dot * z4 * z4
+    # z^n as (z^(n/2))^2 (times z for odd n), z^(n/2) by squaring: a handful of products where a float power
+    # would cost a logarithm and an exponential in every stage
+    k = int(n)
+    m = k // 2
+    half = 1.0
+    b = z
+    while m > 0:
+        if m & 1:
+            half *= b
+        m >>= 1
+        if m > 0:
+            b *= b
+    if k % 2 == 1:
+        return cur_dot * half * half * z
+    return cur_dot * half * half
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
@@ -328,7 +343,7 @@ def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE, piston=AT_STOP):
     # ---- magnetisation: a play on the current (hysteresis); none: I_m tracks I exactly
     if act[I_HYST] > 0.0:
         i_m = x[i0 + MAGNETISATION]
-        dx[i0 + MAGNETISATION] = play_rate(cur, cur_dot, i_m, act[I_HYST])
+        dx[i0 + MAGNETISATION] = play_rate(cur, cur_dot, i_m, act[I_HYST], act[PLAY_N])
     else:
         i_m = cur
         dx[i0 + MAGNETISATION] = cur_dot
@@ -417,7 +432,7 @@ def pack(params: Params, temp_C: float, config: str = "clutch") -> np.ndarray:
     r[V_SUP], r[R_COIL], r[L_COIL], r[R_FW] = v.V_supply, v.R_coil, v.L_coil, v.R_freewheel
     r[K_AMP], r[G_CURRENT] = v.amp_gain, v.g_current
     r[K_F1], r[K_F2], r[F_PRE], r[A_FB] = v.k_F1, v.k_F2, v.F_preload, v.A_fb
-    r[I_HYST], r[I_SAT] = v.I_hyst, v.I_sat
+    r[I_HYST], r[I_SAT], r[PLAY_N] = v.I_hyst, v.I_sat, v.play_exponent
     r[OVERLAP], r[X_PORT], r[CDW] = v.overlap, v.x_port, v.C_d * v.port_width
     # Merritt's steady flow force, jet angle 69 degrees
     r[K_FLOW] = v.flow_force * 2.0 * v.C_d * v.port_width * np.cos(np.radians(69.0))
