@@ -152,7 +152,8 @@ def _verified_by_kp(start, passes):
     relative to the start's (1, 2 or 0.5), the same for the training and the validation plants."""
     def verified(design, n, seed):
         ok = passes[round(design.settings["kp"] / start.settings["kp"], 6)][:n]
-        return {"results": [{"all_pass": x, "metrics": {}} for x in ok], "pass_rate": sum(ok) / n}
+        return {"results": [{"index": i, "all_pass": x, "metrics": {}} for i, x in enumerate(ok)],
+                "pass_rate": sum(ok) / n}
     return verified
 
 

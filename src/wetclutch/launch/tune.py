@@ -196,11 +196,12 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
     chosen = tuning.design
     if tuning.chosen == "start":
         return tuning
-    sources = {n: f"tuned: CMA-ES on {samples} training plants (seed {seed}, {sequence} launches each), chosen on "
-                  f"{VALIDATION_FACTOR * samples} validation plants (seed {seed + 1}), validation score "
-                  f"{tuning.finalists[tuning.chosen][2]:.3f} against the start's {tuning.finalists['start'][2]:.3f}, "
-                  f"passing {b} plants the start fails and failing {c} it passes (p = {pv:.3g})"
-               for n in names for b, c, pv in [tuning.tests[tuning.chosen]]}
+    b, c, pv = tuning.tests[tuning.chosen]
+    source = (f"tuned: CMA-ES on {samples} training plants (seed {seed}, {sequence} launches each), chosen on "
+              f"{VALIDATION_FACTOR * samples} validation plants (seed {seed + 1}), validation score "
+              f"{tuning.finalists[tuning.chosen][2]:.3f} against the start's {tuning.finalists['start'][2]:.3f}, "
+              f"passing {b} plants the start fails and failing {c} it passes (p = {pv:.3g})")
+    sources = dict.fromkeys(names, source)
     tuning.design = Design(chosen.kind, chosen.plant, chosen.settings, chosen.sources | sources, chosen.temps_C,
                            chosen.pressures_Pa, chosen.input_V, chosen.fill_s)
     return tuning
@@ -214,7 +215,7 @@ def _choose(tuning: Tuning, mean: np.ndarray, verified: Callable[[Design, int, i
     start, names = tuning.start, tuning.names
     xs = {"start": np.zeros(len(names)), "best on training": tuning.best_x, "search mean": mean}
     finalists: dict[str, tuple[float, float, float, float]] = {}
-    passes: dict[str, list[bool]] = {}
+    passes: dict[str, dict[int, bool]] = {}
     seen: list[np.ndarray] = []
     for name, x in xs.items():
         if any(np.array_equal(x, y) for y in seen):
@@ -230,8 +231,10 @@ def _choose(tuning: Tuning, mean: np.ndarray, verified: Callable[[Design, int, i
             train = (score(res), res["pass_rate"])
         val = verified(design, VALIDATION_FACTOR * samples, seed + 1)
         finalists[name] = (*train, score(val), val["pass_rate"])
-        passes[name] = [bool(r["all_pass"]) for r in val["results"]]
-    tuning.tests = {k: against_start(passes[k], passes["start"]) for k in finalists if k != "start"}
+        passes[name] = {r["index"]: bool(r["all_pass"]) for r in val["results"]}
+    plants = sorted(passes["start"])
+    tuning.tests = {k: against_start([passes[k][i] for i in plants], [passes["start"][i] for i in plants])
+                    for k in finalists if k != "start"}
     qualified = [k for k, (_, _, p) in tuning.tests.items()
                  if p < SIGNIFICANCE and finalists[k][2] < finalists["start"][2]]
     tuning.chosen = min(qualified, key=lambda k: finalists[k][2]) if qualified else "start"
