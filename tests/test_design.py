@@ -263,3 +263,15 @@ def test_a_controller_file_without_a_later_setting_takes_its_default():
     base = files.to_toml(designs.cached(p, "baseline"))
     with pytest.raises(files.ControllerFileError, match=r"c\.toml: settings\.kp: missing"):
         files.loads(_without(base, "kp"), "c.toml")
+
+
+def test_the_torque_dither_is_as_much_wider_as_the_magnets_play():
+    """The dither must be wider than the play (input volts: I_hyst / g_current); a wider play than the default rig's
+    widens it by the same factor, a narrower one keeps the default."""
+    base = designs.LAUNCH_DEFAULTS["dither_amp_torque"]
+    ref = Params().valve.I_hyst / Params().valve.g_current
+    for over, factor in (({}, 1.0), ({"valve.I_hyst": 0.03}, 1.0), ({"valve.I_hyst": 0.08}, 0.08 / 0.2 / ref),
+                         ({"valve.I_hyst": 0.06, "valve.g_current": 0.15}, 0.06 / 0.15 / ref)):
+        d = designs.design(load(overrides=over))
+        assert d.settings["dither_amp_torque"] == pytest.approx(base * factor, rel=1e-12)
+        assert ("play" in d.sources["dither_amp_torque"]) == (factor > 1.0)

@@ -67,6 +67,23 @@ def true_dead_time(res: rig.RigResult) -> float:
     return t_on - rig.T_STEP
 
 
+@pytest.mark.parametrize("i_hyst", [0.03, 0.08])
+def test_the_magnets_play_is_found_from_the_valves_up_and_down_staircases(i_hyst, tmp_path):
+    """A valve whose play differs from the prior's: the PWM staircase's up and down plateaus give its half-width."""
+    from wetclutch.ident.play import play_half_width
+    from wetclutch.ident.static import plateaus
+
+    p = params.load(overrides={"valve.I_hyst": i_hyst})
+    kw = dict(RUNS["stair"])
+    rig_report.write(rig.run(kw.pop("experiment"), p, **kw), tmp_path / "stair")
+    rec = channels.load(tmp_path / "stair" / "measured.csv")
+    est = play_half_width(plateaus(rec), params.Params())
+    assert est is not None and est.value == pytest.approx(i_hyst, rel=0.03)
+    assert est.extra["pairs"] >= 5 and 0.0 < est.se < 0.1 * i_hyst
+    # the chain takes it into the identified parameters
+    assert ident.identify([rec]).identified.valve.I_hyst == pytest.approx(est.value, rel=1e-12)
+
+
 # ---------------------------------------------------------------- round trip
 
 

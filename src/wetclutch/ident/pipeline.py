@@ -49,6 +49,7 @@ from .onset import Onset, onset
 from .recordings import Recording
 from .result import Identification, identified_params
 from .ringing import resonance
+from .play import play_half_width
 from .static import GAIN_GROUPS, hysteresis, plateaus, static_gain
 from .validation import validate
 
@@ -123,6 +124,8 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
             est[key] = g
         if config == "valve-only" and mode == "pwm" and (h := hysteresis(group)) is not None:
             est["valve_hysteresis_bar"] = h
+            if (play := play_half_width(group, prior)) is not None:
+                est["magnet_play_A"] = play
     if "valve_gain_poly" in est:
         v = est["valve_gain_poly"]
         est["valve_gain"] = Estimate({"slope_bar_per_duty": v.value[0], "offset_bar": v.value[1]},

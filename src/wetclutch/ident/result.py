@@ -127,7 +127,8 @@ def identified_values(prior: Params, est: dict[str, Estimate],
     ``driveline.J_p``, ``J_1``, ``J_s``, ``rig.oil_temp_C``, ``hydraulics.p_prestress`` (the pressure at which
     the stroke starts), ``hydraulics.x_contact`` (from the contact pressure above that prestress, or the
     prior's, with the prior's spring and piston area: the stroke that the pressure's span implies),
-    ``driveline.k_a`` and ``d_a`` (from resonance and damping with the ratio and the
+    ``valve.I_hyst`` (the magnet's play, from the valve's up and down staircases), ``driveline.k_a`` and ``d_a``
+    (from resonance and damping with the ratio and the
     inertias, identified or else from ``fallback`` or the prior, through the relation
     in :mod:`wetclutch.params`).
     """
@@ -153,6 +154,8 @@ def identified_values(prior: Params, est: dict[str, Estimate],
             sets["hydraulics.p_prestress"] = p_start
         if p_contact > p_start:
             sets["hydraulics.x_contact"] = (p_contact - p_start) * h.A_p / h.k_reset
+    if "magnet_play_A" in est:
+        sets["valve.I_hyst"] = float(est["magnet_play_A"].value)
     if "resonance_Hz" in est:
         zeta = est["damping_ratio"].value if "damping_ratio" in est else None
         plant = prior.model_copy(update={"driveline": prior.driveline.model_copy(update=inertias)})

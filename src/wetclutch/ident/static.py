@@ -85,12 +85,17 @@ def static_gain(points: Sequence[Plateau], order: int) -> Estimate | None:
                      "range_bar": [float(p.min()), float(p.max())]})
 
 
-def hysteresis(points: Sequence[Plateau]) -> Estimate | None:
-    """Largest and mean difference between up and down plateaus at the same command (bar)."""
+def up_down_pairs(points: Sequence[Plateau]) -> list[tuple[Plateau, Plateau]]:
+    """The pairs (up, down) of plateaus of one recording at the same command."""
     up = [q for q in points if q.direction in ("up", "first")]
     down = [q for q in points if q.direction == "down"]
     span = max((q.u for q in points), default=0.0) - min((q.u for q in points), default=0.0)
-    pairs = [(a, b) for a in up for b in down if a.rec is b.rec and abs(a.u - b.u) <= 1e-3 * max(span, 1e-9)]
+    return [(a, b) for a in up for b in down if a.rec is b.rec and abs(a.u - b.u) <= 1e-3 * max(span, 1e-9)]
+
+
+def hysteresis(points: Sequence[Plateau]) -> Estimate | None:
+    """Largest and mean difference between up and down plateaus at the same command (bar)."""
+    pairs = up_down_pairs(points)
     if not pairs:
         return None
     diff = np.array([(a.p - b.p) / BAR for a, b in pairs])
