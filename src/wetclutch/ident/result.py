@@ -36,6 +36,7 @@ PARAMS_FROM = {
     "driveline.d_a": "damping_ratio",
     "hydraulics.p_prestress": "stroke_start_Pa",
     "hydraulics.x_contact": "contact_pressure_Pa",
+    "valve.I_hyst": "magnet_play_A",
     "rig.oil_temp_C": "oil_temp_C",
 }
 #: the runs each entry of :data:`PARAMS_FROM` needs, for the reason a parameter stays at the prior
@@ -46,6 +47,7 @@ _NEEDS = {
     "damping_ratio": "a ring-out of at least 0.8 s after synchronisation",
     "contact_pressure_Pa": "a torque onset after a rising command step of a clutch run",
     "stroke_start_Pa": "a rising command step of a clutch run from an empty clutch, its stroke long enough to show",
+    "magnet_play_A": "a staircase of the valve alone in PWM, up and down over the same levels",
 }
 
 
