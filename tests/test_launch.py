@@ -333,3 +333,18 @@ def test_a_friction_curve_flatter_than_the_designs_does_not_slow_the_response(mu
     t95 = [launch.simulate(plant, d, launch.Conditions(t_ref=t_ref, oil_temp_C=oil_temp_C, seed=seed, t_max=2.45))
            .summary["t95_settled_s"] for seed in range(1, 5)]
     assert max(t95) < metrics.REQ_T95_S, t95
+
+
+@pytest.mark.parametrize("over", [{}, {"friction.drag_20C": 0.026, "driveline.ratio": 0.42}])
+def test_the_open_plates_creep_is_their_viscous_drag_through_the_cvt(over):
+    """With the valve closed the waiting vehicle feels the open plates' oil drag, ``drag_20C mu(T) / mu(20 C)`` times
+    the slip (the primary's speed), through the CVT to the axle: ``eta / ratio`` of it."""
+    p = params_load(overrides=over)
+    temp = 15.0
+    creep = launch.open_plates_creep(p, launch.Conditions(oil_temp_C=temp))
+    d = p.friction.drag_20C * oil.dynamic_viscosity(temp) / oil.dynamic_viscosity(20.0)
+    want = d * p.driveline.omega_p0 * p.driveline.eta / p.driveline.ratio
+    # the primary slows a little under the drag and its bearings before the request, and a creep above the road
+    # load starts to move the vehicle (less slip): a few percent less
+    assert creep == pytest.approx(want, rel=0.04)
+    assert creep < want

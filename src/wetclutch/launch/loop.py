@@ -396,6 +396,17 @@ def fastest_contact(params: Params, conditions: Conditions) -> float | None:
     return contact if contact is not None and contact <= 0.0 else None
 
 
+def open_plates_creep(params: Params, conditions: Conditions) -> float:
+    """The creep (N m: the mean axle torque over the creep window before the request) with the valve input at the
+    bottom of its range from the start: what the open plates' oil drag alone pushes into the waiting vehicle,
+    whatever the controller."""
+    cond = conditions.checked()
+    temp = params.rig.oil_temp_C if cond.oil_temp_C is None else float(cond.oil_temp_C)
+    _, tr = clutch.run(params, design_.INPUT_RANGE["dc"][0], cond.t_request, temp_C=temp, dt_out=cond.dt,
+                       rtol=cond.rtol, atol=ATOL)
+    return metrics.standby(tr.t, tr.spring_torque("axle"), cond.t_request)[0]
+
+
 def sequence(params: Params, controller: design_.Design | str, conditions: Conditions, n: int,
              adaptation: Adaptation | None = None, nominal: metrics.Response | None = None) -> list[LaunchResult]:
     """``n`` launches of one clutch, the controller's adaptation carried from each to the next.

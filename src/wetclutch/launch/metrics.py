@@ -130,7 +130,7 @@ def _smooth(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     return out
 
 
-def _standby(t: np.ndarray, T_r: np.ndarray, t_req: float) -> tuple[float, float]:
+def standby(t: np.ndarray, T_r: np.ndarray, t_req: float) -> tuple[float, float]:
     """(creep, peak): the mean of ``T_r`` over the last :data:`CREEP_WINDOW` before the request, the largest
     :data:`PEAK_WINDOW` mean before it."""
     before = t < t_req
@@ -169,14 +169,14 @@ def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_
     """Figures of the response of ``T_r`` to the request ``t_ref`` made at ``t_req``."""
     t_end = t[-1] if t_sync is None else t_sync
     w0, w1 = t_req + STEADY_START, min(t_req + STEADY_END, t_end - 0.1)
-    standby = _standby(t, T_r, t_req)
+    waiting = standby(t, T_r, t_req)
     if w1 - w0 < MIN_WINDOW:
-        return Response.empty(standby, (w0, w1))
+        return Response.empty(waiting, (w0, w1))
     win = (t >= w0) & (t <= w1)
     T_ss = float(np.mean(T_r[win]))
     ref = float(np.mean(t_ref[win]))
     if not ref > 0.0:  # no torque asked for over the window: no relative error, no 95 % level
-        return Response.empty(standby, (w0, w1))
+        return Response.empty(waiting, (w0, w1))
     ess = abs(T_ss - ref) / ref * 100.0
     after = t >= t_req
     y = _smooth(t, T_r)
@@ -196,7 +196,7 @@ def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_
     slip = after & (t < t_end)
     rate = np.abs(np.diff(y)) / np.diff(t)
     jerk = float(np.max(rate[slip[1:]])) if np.any(slip[1:]) else np.nan
-    return Response(T_ss, ess, t95, settled, overshoot, ripple, oscillation, jerk, *standby, (w0, w1))
+    return Response(T_ss, ess, t95, settled, overshoot, ripple, oscillation, jerk, *waiting, (w0, w1))
 
 
 def requirements(r: Response, nominal: Response) -> dict[str, bool]:

@@ -161,9 +161,15 @@ def run_sample(ctx: Context, sample: Sample, grid: tuple[np.ndarray, np.ndarray]
         too_slow = late and launch.fastest_contact(plant, cond) is None
     except WetclutchError:
         too_slow = False  # the open-loop fill failed to simulate: unknown, so not counted
+    # a failed standby: would the plates held open from the start have pushed the waiting vehicle as hard?
+    try:
+        drag = not req["standby"] and launch.open_plates_creep(plant, cond) > metrics.REQ_CREEP_NM
+    except WetclutchError:
+        drag = False
     return {"index": sample.index, "corner": sample.corner, "seed": sample.seed, "values": sample.values,
             "metrics": figures, "requirements": req, "all_pass": all(req.values()), "first_all_pass": first,
-            "slams": slams, "fill_too_slow": too_slow, "error": error, "replay": ctx.replay(sample, plant, cond)}
+            "slams": slams, "fill_too_slow": too_slow, "creep_of_the_drag": drag, "error": error,
+            "replay": ctx.replay(sample, plant, cond)}
 
 
 _SHARED: tuple[Context, tuple[np.ndarray, np.ndarray]] | None = None
@@ -344,6 +350,7 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         # of those, the ones whose valve wide open from the start would not have filled the clutch before the
         # request either: no controller fills them in time
         "failures_fill_too_slow": sum(1 for r in results if r["fill_too_slow"]),
+        "failures_creep_of_the_drag": sum(1 for r in results if r["creep_of_the_drag"]),
         # failures where the controller asked for all the valve gives: the clutch at or beyond its capacity
         "failures_at_capacity": sum(1 for r in results if not r["all_pass"]
                                     and (r["metrics"].get("input_at_max_pct") or 0) >= CAPACITY_SHARE),
