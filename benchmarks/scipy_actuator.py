@@ -18,7 +18,8 @@ the clutch (``bookkeeping=False`` leaves them out: a lighter model than the engi
   freewheeling when it asks for a negative voltage: three modes of the output stage,
   switched at events.
 * Magnet: the magnetising current ``I_m`` follows ``I`` through a smoothed play of
-  half-width ``I_hyst`` (``dI_m/dt = dI/dt min(z, 1)^8``, ``z = (I - I_m) sign(dI/dt) / I_hyst``);
+  half-width ``I_hyst`` (``dI_m/dt = dI/dt min(z, 1)^n``, ``z = (I - I_m) sign(dI/dt) / I_hyst``, ``n`` the
+  play's exponent);
   force ``k_F1 I_m + k_F2 I_m^2``, continued linearly above ``I_sat``.
 * Stem: ``m v' = F_mag(I_m) + F_pre - A_fb p - c x - d v - friction``, Coulomb
   friction by exact stick/slip (events: ``v = 0``, holding force beyond ``F_friction``).
@@ -161,7 +162,7 @@ def _play(r, cur, cur_dot, i_m):
     if r[A.I_HYST] <= 0.0:
         return cur_dot
     z = (cur - i_m if cur_dot > 0.0 else i_m - cur) / r[A.I_HYST]
-    return cur_dot * min(z, 1.0) ** 8 if z > 0.0 else 0.0
+    return cur_dot * min(z, 1.0) ** r[A.PLAY_N] if z > 0.0 else 0.0
 
 
 def _stem_force(m, y, ports=None):
