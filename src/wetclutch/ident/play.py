@@ -44,10 +44,12 @@ def command(rec: Recording) -> Table:
     return Table(np.array(tt), np.array(vv), kinks_are_breakpoints=True)
 
 
-def _separation(prior: Params, i_hyst: float, rec: Recording, pairs: Sequence[tuple[Plateau, Plateau]]) -> float:
-    """The model's mean of down minus up (Pa) over the pairs' windows, with a play of half-width ``i_hyst``."""
+def _separation(prior: Params, i_hyst: float, rec: Recording, u: Table,
+                pairs: Sequence[tuple[Plateau, Plateau]]) -> float:
+    """The model's mean of down minus up (Pa) over the pairs' windows, driven by the recording's command ``u``, with a
+    play of half-width ``i_hyst``."""
     p = prior.model_copy(update={"valve": prior.valve.model_copy(update={"I_hyst": i_hyst})})
-    rn, tr = clutch.run(p, command(rec), float(rec.t[-1]), pwm=rec.input_mode == "pwm", config=rec.config,
+    rn, tr = clutch.run(p, u, float(rec.t[-1]), pwm=rec.input_mode == "pwm", config=rec.config,
                         temp_C=rec.oil_temp_C)
     pk = tr.x[:, rn.i_pressure]
 
@@ -69,13 +71,15 @@ def play_half_width(points: Sequence[Plateau], prior: Params) -> Estimate | None
     rec = pairs[0][0].rec
     measured = float(np.mean([b.p - a.p for a, b in pairs]))
     se = float(np.sqrt(np.sum([a.se**2 + b.se**2 for a, b in pairs])) / len(pairs))
+    u = command(rec)
 
     def gap(i: float) -> float:
-        return _separation(prior, i, rec, pairs) - measured
+        return _separation(prior, i, rec, u, pairs) - measured
 
     lo, g_lo = 0.0, gap(0.0)
     if g_lo >= 0.0:
-        return _estimate(0.0, se, np.inf, rec, pairs, measured)
+        # the model without a play parts the plateaus as much already: no play to resolve, its error unknown
+        return _estimate(0.0, se, float("nan"), rec, pairs, measured)
     hi = max(prior.valve.I_hyst, 10.0 * I_TOL)
     g_hi = gap(hi)
     while g_hi < 0.0:

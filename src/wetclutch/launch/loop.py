@@ -384,15 +384,19 @@ def nominal_response(d: design_.Design, cond: Conditions) -> metrics.Response:
     return _NOMINAL[key]
 
 
+def _open_loop(params: Params, conditions: Conditions, u: float) -> Trajectory:
+    """The plant with the valve input held at ``u`` from the start up to the request (no controller)."""
+    cond = conditions.checked()
+    temp = params.rig.oil_temp_C if cond.oil_temp_C is None else float(cond.oil_temp_C)
+    return clutch.run(params, u, cond.t_request, temp_C=temp, dt_out=cond.dt, rtol=cond.rtol, atol=ATOL)[1]
+
+
 def fastest_contact(params: Params, conditions: Conditions) -> float | None:
     """When the plates first touch (s from the request, negative before it) with the valve input at the top of its
     range from the start: the fastest fill the valve gives, whatever the controller. None: not before the
     request, so that no controller fills this clutch before torque is asked for."""
-    cond = conditions.checked()
-    temp = params.rig.oil_temp_C if cond.oil_temp_C is None else float(cond.oil_temp_C)
-    _, tr = clutch.run(params, design_.INPUT_RANGE["dc"][1], cond.t_request, temp_C=temp, dt_out=cond.dt,
-                       rtol=cond.rtol, atol=ATOL)
-    contact = metrics.first_contact(tr.t, tr.clutch_torque("clutch"), cond.t_request)
+    tr = _open_loop(params, conditions, design_.INPUT_RANGE["dc"][1])
+    contact = metrics.first_contact(tr.t, tr.clutch_torque("clutch"), conditions.t_request)
     return contact if contact is not None and contact <= 0.0 else None
 
 
@@ -400,11 +404,8 @@ def open_plates_creep(params: Params, conditions: Conditions) -> float:
     """The creep (N m: the mean axle torque over the creep window before the request) with the valve input at the
     bottom of its range from the start: what the open plates' oil drag alone pushes into the waiting vehicle,
     whatever the controller."""
-    cond = conditions.checked()
-    temp = params.rig.oil_temp_C if cond.oil_temp_C is None else float(cond.oil_temp_C)
-    _, tr = clutch.run(params, design_.INPUT_RANGE["dc"][0], cond.t_request, temp_C=temp, dt_out=cond.dt,
-                       rtol=cond.rtol, atol=ATOL)
-    return metrics.standby(tr.t, tr.spring_torque("axle"), cond.t_request)[0]
+    tr = _open_loop(params, conditions, design_.INPUT_RANGE["dc"][0])
+    return metrics.standby(tr.t, tr.spring_torque("axle"), conditions.t_request)[0]
 
 
 def sequence(params: Params, controller: design_.Design | str, conditions: Conditions, n: int,
