@@ -23,7 +23,7 @@ from . import signals
 from .compiled import jit, jit_inline
 from .dopri import C, component, dense, error_norm, stage, weights
 from .modes import forget, settle, stale
-from .rhs import copy, events, rhs, rhs_call
+from .rhs import copy, events, rhs, rhs_call, static_limit
 from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_AMP, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PISTON, FS_PWM_H,
                         FS_PWM_NEXT, FS_PWM_START, FS_T, GRIP, IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED,
                         IS_SETTLE, IS_STEPS, IS_SWITCHES, LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
@@ -321,6 +321,37 @@ def _grazing(e_ev, soon, ws, net):
             ws.fstate[fs_grip(nc, net.gr_in.shape[0]) + j] = GRIP
 
 
+#: a slide whose slip, from zero at its step's start, cannot have left this share of its speed's absolute tolerance
+#: before it turned back is below the integration's resolution (:func:`_unresolved_slide`)
+UNRESOLVED = 1e-3
+
+
+@jit_inline
+def _unresolved_slide(e_ev, dt, y_old, atol, ws, net):
+    """A sliding clutch whose slip is back through zero ``dt`` after its step began at zero slip, at a rate too
+    small to have left :data:`UNRESOLVED` of its speed's tolerance: a clutch released at its static capacity
+    while the torque on it was turning back (a valve stem at the peak of its drive). The dense output cannot
+    resolve such a slide, and its zero comes too early, where the torque still exceeds the capacity: the restart
+    releases the clutch again, by a tenth of a microsecond a time. The clutch is held there instead, with a grip
+    margin of twice the excess the slide began with (its rate times its inertia, relative to its static capacity:
+    some 1e-5 for a valve stem), which it keeps until a real breakaway. Returns False if the slide was another."""
+    j = _sliding(e_ev, ws, net)
+    if j < 0:
+        return False
+    a = net.cl_a[j]
+    b = net.cl_b[j]
+    s0 = y_old[a] - (y_old[b] if b >= 0 else 0.0)
+    r0 = ws.K[0, a] - (ws.K[0, b] if b >= 0 else 0.0)
+    if abs(s0) + abs(r0) * dt > UNRESOLVED * atol[a]:
+        return False
+    inertia = net.J[a] if b < 0 else net.J[a] * net.J[b] / max(net.J[a] + net.J[b], 1e-300)
+    lim = static_limit(net, j, ws.aux[net.cl_a.shape[0] + j], 0.0)
+    if not lim > 0.0:
+        return False
+    ws.fstate[fs_grip(net.cl_a.shape[0], net.gr_in.shape[0]) + j] = max(GRIP, 2.0 * inertia * abs(r0) / lim)
+    return True
+
+
 @jit_inline
 def _next_step(h, log_err, at_lim, ws):
     """PI step-size control after an accepted step (Hairer's DOPRI5: steadier near the stability limit),
@@ -399,6 +430,10 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
                 if stalls > 100 or soon > MAX_SOON:
                     return ERR_ZENO
                 _grazing(e_ev, soon, ws, net)
+            elif _unresolved_slide(e_ev, t_ev - t, y_old, atol, ws, net):
+                soon += 1
+                if soon > MAX_SOON:
+                    return ERR_ZENO
             else:
                 stalls = 0
                 soon = 0
