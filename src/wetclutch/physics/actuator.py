@@ -210,7 +210,8 @@ def play_rate(cur, cur_dot, i_m, r, n):
     # explicit integrator overshoots the play (an uncapped z^n runs away there)
     z = min(z, 1.0)
     # z^n as (z^(n/2))^2 (times z for odd n), z^(n/2) by squaring: a handful of products where a float power
-    # would cost a logarithm and an exponential in every stage
+    # would cost a logarithm and an exponential in every stage (numba's ``z ** n`` with a run-time n is not the
+    # same number: it moved a launch by 17 of 12,897 steps)
     k = int(n)
     m = k // 2
     half = 1.0
