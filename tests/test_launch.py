@@ -224,10 +224,10 @@ def test_the_request_takes_the_s_curve_where_the_clutch_output_rings(j_1, ratio)
 
 def test_a_heavy_clutch_output_known_to_the_design_settles_in_time_with_the_s_curve():
     # a clutch output 30 times the built-in rig's at a ratio of 0.45, known to the design: through the two stages the
-    # request rings it (settled t95 0.25 s, measured); through the S-curve it settles in time (0.16 s)
+    # request rings it (settled t95 0.24 s, measured); through the S-curve it settles in time (0.16 s)
     plant = params_load(overrides={"driveline.J_1": 0.03, "driveline.ratio": 0.45})
     d = designs.design(plant)
-    cond = launch.Conditions(t_ref=150.0, oil_temp_C=60.0, seed=3)
+    cond = launch.Conditions(t_ref=200.0, oil_temp_C=90.0, seed=2)
     shaped, stages = (launch.simulate(plant, dd, cond, nominal=metrics.Response.empty()).summary
                       for dd in (d, designs.with_settings(d, d_a=1e5)))  # an axle damped so that nothing rings
     assert shaped["t95_settled_s"] < metrics.REQ_T95_S < stages["t95_settled_s"]

@@ -129,7 +129,11 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       filtered axle torque settles only some 60 ms after the start of the recording.
     * **Anti-windup.** Both integrators stop when the input saturates in the
       direction that would wind them further (conditional integration), and
-      the pressure target is limited to the supply pressure.
+      the pressure target is limited to the supply pressure. The torque
+      integrator does not wind down while the shaped request still rises
+      (:data:`REF_RISING`): a torque ahead of it then is a transient (the jolt
+      of a contact in cold oil, a heavy clutch output ringing), and wound down
+      against it the integrator held the pressure short for 100 to 150 ms.
 
 ``baseline`` (what the field uses, for comparison)
     A timed fill pulse (full input for the fill time of the design plant at the measured
@@ -339,6 +343,8 @@ TRAPPED = 0.05e5
 FILLED_NEAR = 0.05e5
 #: half-width (Pa) of the band about ``dither_high_above`` within which the torque dither keeps its frequency
 DITHER_BAND = 0.1e5
+#: the shaped request counts as still rising while it is short of the request by more than this share of it
+REF_RISING = 0.05
 FILL, HOLD, TORQUE, LOCKUP = 0, 1, 2, 3
 SYNC_SLIP = 2.0  # rad/s: measured slip below which the clutch counts as synchronised
 
@@ -623,9 +629,12 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
         # and slam the pressure up when the plates stop the piston: lead it by no more than the fill's request does
         p_set = min(p_set, cs[CS_PF] + ctrl[REQ_LEAD])
     u_prev = cs[CS_U]
-    # nor does the torque integrator wind up against plates that do not touch yet
+    # nor does the torque integrator wind up against plates that do not touch yet, nor down while the shaped
+    # request still rises: a torque ahead of it there is the plates' contact jolt or the clutch output ringing,
+    # transients the request is on its way to anyway, and an integrator wound down against them holds the
+    # pressure short of the request's for 100 to 150 ms afterwards (the torque's last entry into its band late)
     wind_up = (gated or cs[CS_ANSWERED] == 0.0 or (u_prev >= ctrl[U_MAX] and e_t > 0.0)
-               or (u_prev <= ctrl[U_MIN] and e_t < 0.0))
+               or (u_prev <= ctrl[U_MIN] and e_t < 0.0) or (e_t < 0.0 and r < (1.0 - REF_RISING) * t_ref))
     if not wind_up:
         cs[CS_ZT] += ctrl[KI_T] * sens * e_t * dt
     return p_set
