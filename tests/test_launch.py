@@ -368,3 +368,20 @@ def test_a_valve_stem_released_below_the_integrations_resolution_is_held_not_rel
     # about as many events as the same launch with the designed dither (750 at 0.35 V)
     assert r.stats["events"] < 2 * 750
     assert r.summary["steady_state_error_pct"] < 10.0
+
+
+def test_a_torque_ahead_of_the_rising_request_does_not_hold_the_response_back():
+    # cold oil, a heavy clutch output and a kiss point 0.8 bar up: the plates touch as the request comes and the axle
+    # torque jumps past 95 % of the request within 70 ms while the shaped request is at half of it. The torque
+    # integrator wound down against that jolt held the pressure short afterwards: settled t95 0.232 s (measured);
+    # it waits until the shaped request is within 5 % of the request, and the torque stays in its band (0.171 s)
+    plant = params_load(overrides={
+        "hydraulics.p_prestress": 78700.0, "hydraulics.x_contact": 1.647e-3, "friction.mu_scale": 1.03,
+        "friction.mu_slope": 0.808, "hydraulics.p_supply": 7.0e5, "hydraulics.leak_85C": 3.5e-12,
+        "valve.d_stem": 99.6, "driveline.J_1": 8.73e-3, "hydraulics.line_length": 1.81,
+        "hydraulics.air_fraction": 0.0043, "driveline.ratio": 0.60, "driveline.eta": 0.914, "driveline.k_a": 493.0,
+        "engage.T_load": 28.4})
+    cond = launch.Conditions(t_ref=157.6, oil_temp_C=11.6, seed=3, noise_scale=1.155)
+    s = launch.simulate(plant, designs.design(Params()), cond, nominal=metrics.Response.empty()).summary
+    assert s["t95_s"] < 0.1
+    assert s["t95_settled_s"] < metrics.REQ_T95_S
