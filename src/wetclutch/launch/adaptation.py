@@ -1,5 +1,5 @@
-"""What the launch controller learns across launches: kiss point, friction factor and its slope with slip per
-oil-temperature band, and the clutch output's inertia.
+"""What the launch controller learns across launches: kiss point, friction factor and its slope with slip, and the
+hold's margin below the kiss point per oil-temperature band, and the clutch output's inertia.
 
 Within a launch the controller finds the real kiss point (torque onset, or a search
 upward from where it believed it) and estimates the friction factor (the clutch's
@@ -12,7 +12,12 @@ the drift since the last launch to correct. The friction factor's slope with sli
 the clutch's ``mu(slip)`` departs from the design's as the slip falls) moves the next
 launch's estimate with the slip, so that its low-pass does not lag that drift. The clutch output's inertia, which
 the friction-factor estimate needs to tell the clutch's torque from the axle's, is measured in the slip phase and
-taken by the next launch at any temperature. The state is a small TOML file
+taken by the next launch at any temperature. A launch whose waiting vehicle was pushed harder than the design's
+``creep_limit`` (the mean of the measured ``T_r`` over the last 0.2 s before the request), by the plates and not only
+by the open plates' oil drag, makes the next launches in its band hold the plates :data:`MARGIN_STEP` further below
+the kiss point, up to :data:`MARGIN_MAX`: where the valve cannot hold the pressure at the kiss point (cold oil: a
+stiffly damped stem creeps into the supply port, and the pressure jumps past the plates' contact) the plates are kept
+apart by what the pressure wanders, at the price of a little more stroke at the request. The state is a small TOML file
 (``launch``/``verify --sequence``, ``--adaptation``).
 """
 
@@ -31,9 +36,15 @@ from .controller import FRICTION_SLOPE_MAX, J1_MAX, THETA_MAX, THETA_MIN
 
 BAND_C = 20.0
 #: the fields of a band in the file (``to_C`` is written for the reader; the band is known by ``from_C``)
-BAND_FIELDS = ("from_C", "to_C", "kiss_Pa", "launches", "friction_factor", "friction_slope_per_rad_s")
+BAND_FIELDS = ("from_C", "to_C", "kiss_Pa", "launches", "friction_factor", "friction_slope_per_rad_s",
+               "hold_margin_Pa")
 #: weight of a new finding against what was learnt (exponential forgetting: drift is followed, noise averaged)
 GAIN = 0.5
+#: a launch whose standby creep exceeded the design's ``creep_limit`` (the plates' part of it, not the open plates' drag
+#: alone) moves the hold of the next launches in its band MARGIN_STEP (Pa) further below the kiss point, up to
+#: MARGIN_MAX (Pa)
+MARGIN_STEP = 0.02e5
+MARGIN_MAX = 0.1e5
 
 
 def band(temp_C: float) -> int:
@@ -60,6 +71,8 @@ class Adaptation:
     slope: dict[int, float] = field(default_factory=dict)
     #: the clutch output's inertia (kg m^2), a property of the mechanics, not of the oil: one for all bands
     inertia: float | None = None
+    #: how far (Pa) below the kiss point the hold keeps the plates, by band (none: at it)
+    margin: dict[int, float] = field(default_factory=dict)
 
     def kiss(self, temp_C: float) -> float | None:
         """The learnt kiss point at ``temp_C``, or None if nothing was learnt in its band."""
@@ -73,29 +86,36 @@ class Adaptation:
         """The learnt slope of the friction factor with slip at ``temp_C`` (1/(rad/s)), or None."""
         return self.slope.get(band(temp_C))
 
+    def hold_margin(self, temp_C: float) -> float:
+        """How far (Pa) below the kiss point the hold keeps the plates at ``temp_C`` (0: nothing learnt)."""
+        return self.margin.get(band(temp_C), 0.0)
+
     def learn(self, temp_C: float, found_Pa: float, friction: float | None = None,
-              slope: float | None = None, inertia: float | None = None) -> Adaptation:
+              slope: float | None = None, inertia: float | None = None, crept: bool = False) -> Adaptation:
         """The state after a launch at ``temp_C`` that found the kiss point at ``found_Pa`` and, if it slipped long
         enough to measure them, the friction factor ``friction``, its slope with slip ``slope`` and the clutch
-        output's inertia ``inertia``."""
+        output's inertia ``inertia``; ``crept``: its plates pushed the waiting vehicle beyond the creep limit."""
         b = band(temp_C)
 
         def learnt(old: dict[int, float], new: float | None) -> dict[int, float]:
             return old if new is None else old | {b: _blend(old.get(b), new)}
 
+        margin = self.margin | {b: min(self.hold_margin(temp_C) + MARGIN_STEP, MARGIN_MAX)} if crept else self.margin
         return Adaptation(learnt(self.kiss_Pa, found_Pa), self.launches | {b: self.launches.get(b, 0) + 1},
                           learnt(self.friction, friction), learnt(self.slope, slope),
-                          self.inertia if inertia is None else _blend(self.inertia, inertia))
+                          self.inertia if inertia is None else _blend(self.inertia, inertia), margin)
 
     def to_toml(self) -> str:
         bands = [{"from_C": OIL_TEMP_RANGE_C[0] + b * BAND_C, "to_C": OIL_TEMP_RANGE_C[0] + (b + 1) * BAND_C,
                   "kiss_Pa": v, "launches": self.launches.get(b, 0)}
                  | ({"friction_factor": self.friction[b]} if b in self.friction else {})
                  | ({"friction_slope_per_rad_s": self.slope[b]} if b in self.slope else {})
+                 | ({"hold_margin_Pa": self.margin[b]} if b in self.margin else {})
                  for b, v in sorted(self.kiss_Pa.items())]
         top = {"band_C": BAND_C} | ({"output_inertia_kg_m2": self.inertia} if self.inertia is not None else {})
         return ("# wetclutch adaptation state: the clutch output's inertia (kg m^2); per oil-temperature band: kiss "
-                "point (Pa), friction factor (-), its slope with slip (1/(rad/s))\n"
+                "point (Pa), friction factor (-), its slope with slip (1/(rad/s)), the hold's margin below the kiss "
+                "point (Pa)\n"
                 + tomli_w.dumps(top | {"band": bands}))
 
 
@@ -114,7 +134,7 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
     if inertia is not None and (isinstance(inertia, bool) or not isinstance(inertia, (int, float))
                                 or not 0.0 <= inertia <= J1_MAX):
         raise WetclutchError(f"{source}: output_inertia_kg_m2: must be a number in 0..{J1_MAX:g} (got {inertia!r})")
-    kiss, count, fric, slopes = {}, {}, {}, {}
+    kiss, count, fric, slopes, margins = {}, {}, {}, {}, {}
     rows = data.get("band", [])
     if not isinstance(rows, list):
         raise WetclutchError(f"{source}: band must be an array of tables")
@@ -135,14 +155,16 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
             raise WetclutchError(f"{where}.launches: must be a whole number >= 0 (got {n!r})")
         b = band(lo + 0.5 * BAND_C)
         kiss[b], count[b] = float(v), n
-        for key, learnt, (low, high) in (("friction_factor", fric, FRICTION_RANGE),
-                                         ("friction_slope_per_rad_s", slopes, (-FRICTION_SLOPE_MAX, FRICTION_SLOPE_MAX))):
+        learnable = (("friction_factor", fric, FRICTION_RANGE),
+                     ("friction_slope_per_rad_s", slopes, (-FRICTION_SLOPE_MAX, FRICTION_SLOPE_MAX)),
+                     ("hold_margin_Pa", margins, (0.0, MARGIN_MAX)))
+        for key, learnt, (low, high) in learnable:
             if key in row:
                 x = row[key]
                 if isinstance(x, bool) or not isinstance(x, (int, float)) or not low <= x <= high:
                     raise WetclutchError(f"{where}.{key}: must be a number in {low:g}..{high:g} (got {x!r})")
                 learnt[b] = float(x)
-    return Adaptation(kiss, count, fric, slopes, None if inertia is None else float(inertia))
+    return Adaptation(kiss, count, fric, slopes, None if inertia is None else float(inertia), margins)
 
 
 def load(path: str | Path) -> Adaptation:

@@ -52,7 +52,9 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       CVT ratio), the hold keeps the plates :data:`HOLD_APART` short of the kiss point:
       the hold's pressure wanders by about that much (the magnet's play, a valve whose
       static map is off), and at the kiss point each wander above it pushes the
-      waiting vehicle beyond the limit.
+      waiting vehicle beyond the limit. Where it still pushes too hard (a stiffly damped
+      stem creeping into the supply port), the next launches hold a learnt margin further
+      below the kiss point (``CS_MARGIN``, :mod:`wetclutch.launch.adaptation`).
     * **Feedforward through the inverse static map.** The torque request is
       turned into a pressure through the nominal friction law
       (``T_c = T_r i / eta``, ``F_n = T_c / mu(slip)``, ``p = p_kiss + F_n / A_p``)
@@ -205,7 +207,10 @@ N_RECENT = 16
 CS_SHAPED = CS_RECENT + N_RECENT
 CS_REF_N = CS_SHAPED + 1
 CS_REF_BUF = CS_REF_N + 1
-N_CS = CS_REF_BUF + N_REF_W
+#: how far (Pa) below the kiss point the hold keeps the plates at this oil temperature: learnt on earlier launches
+#: whose waiting vehicle was pushed too hard (:mod:`wetclutch.launch.adaptation`)
+CS_MARGIN = CS_REF_BUF + N_REF_W
+N_CS = CS_MARGIN + 1
 #: time constant of the fast pressure filter (s)
 TAU_PF5 = 0.005
 #: the fill's steep rise has ended once the fast-filtered pressure rises slower than this (Pa/s), the stroke's ramp
@@ -810,8 +815,10 @@ def _launch(ctrl, cs, meas, t_ref):
     if phase == FILL and cs[CS_STROKE] == 0.0:
         _stroke_start(ctrl, cs, p, dt)
     p_hold = cs[CS_KISS] + ctrl[HOLD_OFFSET]
-    if phase == HOLD and cs[CS_TMIN] > DRAG_SHARE * ctrl[CREEP_LIMIT]:
-        p_hold -= HOLD_APART
+    if phase == HOLD:
+        p_hold -= cs[CS_MARGIN]
+        if cs[CS_TMIN] > DRAG_SHARE * ctrl[CREEP_LIMIT]:
+            p_hold -= HOLD_APART
     if phase == FILL:
         # (the piston has not started to move before the chamber's steep rise has ended; a short stroke is not waited
         # for: the full input would reach the plates before its start could show)
@@ -932,7 +939,7 @@ def _common(r: np.ndarray, kind: int, dt: float, u_range: tuple[float, float]) -
 
 
 def initial_state(kiss_Pa: float, learnt: bool = False, friction_factor: float | None = None,
-                  slope: float | None = None, inertia: float = 0.0) -> np.ndarray:
+                  slope: float | None = None, inertia: float = 0.0, margin: float = 0.0) -> np.ndarray:
     """The controller's state before a launch.
 
     Parameters
@@ -949,6 +956,9 @@ def initial_state(kiss_Pa: float, learnt: bool = False, friction_factor: float |
     inertia
         The clutch output's inertia (kg m^2) the friction-factor estimate starts from: one measured on earlier
         launches, or the design's ``j_1`` (:func:`start_inertia`).
+    margin
+        How far (Pa) below the kiss point the hold keeps the plates, learnt on earlier launches at this oil
+        temperature (:meth:`wetclutch.launch.adaptation.Adaptation.hold_margin`).
     """
     cs = np.zeros(N_CS)
     cs[CS_J1] = inertia
@@ -957,6 +967,7 @@ def initial_state(kiss_Pa: float, learnt: bool = False, friction_factor: float |
     cs[CS_THETA_START] = friction_factor or 0.0
     cs[CS_SLOPE] = slope or 0.0
     cs[CS_SLOPE_FOUND] = np.nan
+    cs[CS_MARGIN] = margin
     return cs
 
 
