@@ -17,7 +17,7 @@ from wetclutch.plant import clutch
 from wetclutch.rig import calibration
 from wetclutch.rig import experiments as rig
 from wetclutch.sim.network import integrate
-from wetclutch.sim.signals import Step, Table
+from wetclutch.sim.signals import Sine, Step, Table
 
 
 @pytest.fixture(scope="module")
@@ -197,6 +197,28 @@ def test_the_smoothed_play_follows_its_closed_form_on_a_rising_current(n):
     assert np.allclose(xi[pick], want, rtol=1e-5, atol=1e-6)
 
 
+@pytest.mark.parametrize("n", [8, 32])
+def test_the_iron_stays_put_after_the_current_turns_until_the_play_is_crossed(n):
+    """The engine maps the magnetisation along a monotone current and locates the current's turns. After a turn the
+    lag is negative until the current has moved back by it, and ``dI_m/dt`` is exactly 0 there: ``I_m`` holds its
+    value (a map carried through the turn would run back down the curve with the current)."""
+    p = wc.load_params(overrides={"valve.I_hyst": 0.045, "valve.play_exponent": n})
+    rn = clutch.build(p, Sine(0.6, 7.0, offset=2.5), config="valve-only")  # +-0.12 A on the coil: the play crossed
+    tr = integrate(rn.network, 1.0, dt_out=1e-4)
+    cur, i_m = tr.x[:, rn.i_current], tr.x[:, rn.i_current + A.MAGNETISATION]
+    assert tr.stats["turns"] == 14  # every half period of the 7 Hz input
+    d = np.sign(np.diff(cur))
+    turns = np.flatnonzero(d[1:] != d[:-1]) + 1  # the extreme sample; the next lies past the turn
+    checked = 0
+    for k in turns[turns < cur.size - 2]:
+        lag = abs(cur[k] - i_m[k])
+        inside = np.flatnonzero(np.abs(cur[k + 1:] - cur[k]) > 0.9 * lag)
+        end = k + 1 + (inside[0] if inside.size else cur.size - k - 1)
+        assert np.max(np.abs(i_m[k + 1:end] - i_m[k + 1])) < 1e-12
+        checked += end - k - 1
+    assert checked > 1000
+
+
 def test_valve_staircase_shows_the_magnetic_hysteresis_under_pwm():
     """Up and down staircases differ visibly (the PWM ripple does not dither the play out); none without it."""
     d = np.array([0.1, 0.2, 0.3])  # the top step is the turning point: compare the two below it
@@ -312,7 +334,9 @@ def test_engine_agrees_with_an_independent_implementation_of_the_same_equations(
     sp = sp_mod.actuator_step_scipy(5.0)
     rn = clutch.build(wc.Params(), Step(1.0, 0.2, 1.0), temp_C=85.0)
     tr = integrate(rn.network, 5.0)
-    assert sp["n_events"] == tr.stats["events"]
+    # the engine's turns of the coil current (where it follows the magnet's play anew) are its own, not the model's:
+    # here the current's settling, which overshoots its set point by a few nA at the step's tolerance
+    assert sp["n_events"] == tr.stats["events"] - tr.stats["turns"]
     stem = np.flatnonzero(np.array([name.startswith("stem") for _, name in sp["log"]]))
     assert stem.size == np.count_nonzero(tr.events[:, 1] == 2)
     p_eng = tr.x[:, rn.i_pressure]
@@ -377,4 +401,6 @@ def test_coil_current_through_the_amplifier_stage_limits_follows_the_closed_form
     cur = tr.x[tr.t >= 1.0, rn.network.actuator_state + A.CURRENT]
     exact = np.where(s < t_sw, i_inf + (i0 - i_inf) * np.exp(-rate * s),
                      i_ref + (i_sw - i_ref) * np.exp(-(R + K) / L * (s - t_sw)))
-    assert np.max(np.abs(cur - exact)) < 1e-8  # A, of 0.2-0.8 A
+    # A, of 0.2-0.8 A: rtol 1e-8 holds the RMS of the step's errors over all states, so the current alone may take a
+    # few times its share (1.3e-8 since the magnet's play, the stiffest mode, no longer holds the steps short)
+    assert np.max(np.abs(cur - exact)) < 2e-8

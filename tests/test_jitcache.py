@@ -19,7 +19,7 @@ import json, sys
 import wetclutch
 from wetclutch import _jitcache
 from wetclutch.physics import actuator
-actuator.play_rate(0.2, 1.0, 0.1, 0.05, 8.0)
+actuator.magnet_force(0.2, actuator.pack(wetclutch.Params(), 85.0))
 print(json.dumps([[str(stamp), [str(d) for d in dirs]] for stamp, dirs in _jitcache.cache_places()]))
 """
 

@@ -47,9 +47,16 @@ the coil current by a play (backlash, Prandtl) of half-width ``I_hyst``: ``I_m``
 stays put while ``|I - I_m| < I_hyst`` and is dragged along at that distance
 beyond. The play is smoothed as a Duhem model, ``dI_m/dt = dI/dt * min(z, 1)^n`` with
 ``z = (I - I_m) sign(dI/dt) / I_hyst`` (0 when negative) and ``n`` = ``valve.play_exponent`` (8), so it
-needs no events; the steep power keeps ``I_m`` nearly still inside the play (a larger ``n``: a sharper play,
-the ideal one as ``n`` grows), and the lag settles at
-``I_hyst`` while the current keeps moving one way. A PWM ripple smaller than the
+switches no modes (a sharp play would hold and drag by turns); the steep power keeps ``I_m`` nearly still inside
+the play (a larger ``n``: a sharper play, the ideal one as ``n`` grows), and the lag settles at
+``I_hyst`` while the current keeps moving one way. The model is rate-independent: while the current moves one way,
+the lag ``zeta`` (``z`` with the direction of the current's travel) obeys ``dzeta/dsigma = 1 - g(zeta)`` in the
+path ``sigma = |I - I_0| / I_hyst`` (``g`` = 0 for ``zeta <= 0``, ``zeta^n`` up to 1, 1 beyond), so ``I_m`` is a
+function of ``I`` alone. Its rate, ``n |dI/dt| / I_hyst`` where the lag nears the play's edge, is the stiffest of
+the plant (1.6e4 1/s on the torque dither's swings), so the engine does not integrate ``I_m``: within each step,
+where the current is monotone (a located event where it turns, :func:`play_event`), ``I_m`` is the exact map of the
+current (:func:`magnetisation`, the flow through tables, :func:`play_flow`), its state slot holds its value at the
+step's start and is moved on where a step ends. A PWM ripple smaller than the
 play wears the lag down only slowly (the iron sees minor loops), so unlike the
 stem's Coulomb friction, which the ripple dithers out, this hysteresis stays
 visible in PWM mode. Above ``I_sat`` the iron saturates: the force keeps the slope it
@@ -63,6 +70,8 @@ compiled kernel :func:`evaluate` from its right-hand side.
 """
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 from numba import njit
@@ -118,8 +127,25 @@ from . import friction, oil
     FB_GAP,  # laminar clearance of the stem's guide out of the feedback chamber, m^3/(s Pa)
     FB_TURB,  # damping orifice and the guide's vent bore in series (turbulent part of the path), m^3/(s Pa^0.5)
     PLAY_N,  # exponent of the smoothed play (a whole number >= 1)
+    PLAY_INV_DTAU,  # intervals of the play's flow table per unit of its path (:func:`play_flow`)
     N_ACT,
-) = range(47)
+) = range(48)
+
+#: intervals of each of the play's two tables (:func:`play_flow`, :func:`play_time`): a quintic each, to
+#: some 2e-12 of the play's width at n = 8 and 2e-11 at n = 1, 2 or 64
+PLAY_INTERVALS = 384
+#: the tables follow the named slots: the flow's, then the flow time's
+PLAY_FLOW = N_ACT
+PLAY_TIME = N_ACT + 6 * PLAY_INTERVALS
+#: the record's length
+RECORD_SIZE = N_ACT + 12 * PLAY_INTERVALS
+#: the flow table ends where the lag is within this share of I_hyst of its limit, a rounding of 1 (an exponential
+#: beyond it, a library call in every stage, made a clutch step twice as slow)
+PLAY_TAIL = 1e-16
+#: the play's direction holds while the coil current's rate does not turn by more than this (in volts across the
+#: coil, the event function's unit): far above the rate's rounding at rest (some 1e-14 V), far below a turn that
+#: moves the magnetisation (a 1e-9 V turn over a 1 ms step moves the current by 1e-11 A on the 0.1 H coil)
+PLAY_TURN = 1e-9
 
 DC, PWM = 0, 1
 #: modes of the DC amplifier's output stage
@@ -178,10 +204,12 @@ def _with_piston(g_amp, p, act, piston):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def event(cur, p, u, act, amp_mode, piston):
-    """The actuator's event function: the amplifier's (:func:`amplifier_event`) and the piston's
-    (:func:`piston_event`), whichever is nearer its switch."""
-    return _with_piston(amplifier_event(cur, u, act, amp_mode), p, act, piston)
+def event(cur, p, u, ext, act, amp_mode, piston, direction):
+    """The actuator's event function: the amplifier's (:func:`amplifier_event`), the play's (:func:`play_event`,
+    the current moving in ``direction``) and the piston's (:func:`piston_event`), whichever is nearer its switch."""
+    g = min(amplifier_event(cur, u, act, amp_mode), play_event(cur, _coil_voltage(cur, u, ext, act, amp_mode), act,
+                                                                direction))
+    return _with_piston(g, p, act, piston)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
@@ -200,31 +228,93 @@ def magnet_force(i_m, act):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def play_rate(cur, cur_dot, i_m, r, n):
-    """dI_m/dt of the smoothed play (Duhem form, see the module docstring) of half-width ``r`` > 0 and exponent
-    ``n`` (a whole number >= 1)."""
-    z = (cur - i_m if cur_dot > 0.0 else i_m - cur) * (1.0 / r)
-    if z <= 0.0:
-        return 0.0
-    # I_m never outruns I: capping keeps the rate bounded even where a trial stage of the
-    # explicit integrator overshoots the play (an uncapped z^n runs away there)
-    z = min(z, 1.0)
-    # z^n as (z^(n/2))^2 (times z for odd n), z^(n/2) by squaring: a handful of products where a float power
-    # would cost a logarithm and an exponential in every stage (numba's ``z ** n`` with a run-time n is not the
-    # same number: it moved a launch by 17 of 12,897 steps)
-    k = int(n)
-    m = k // 2
-    half = 1.0
-    b = z
-    while m > 0:
-        if m & 1:
-            half *= b
-        m >>= 1
-        if m > 0:
-            b *= b
-    if k % 2 == 1:
-        return cur_dot * half * half * z
-    return cur_dot * half * half
+def _quintic(act, o, u):
+    """The table at ``act[o]`` (six power-series coefficients per interval) at ``u`` intervals from its start."""
+    k = min(int(u), PLAY_INTERVALS - 1)
+    t = u - k
+    c = o + 6 * k
+    return act[c] + t * (act[c + 1] + t * (act[c + 2] + t * (act[c + 3] + t * (act[c + 4] + t * act[c + 5]))))
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def play_flow(tau, act):
+    """The play's lag ``zeta`` after the path ``tau`` (in ``I_hyst``) from a lag of 0: ``dzeta/dtau = 1 - g(zeta)``.
+
+    Negative ``tau`` is the flow's linear part, where the iron stays put; beyond the table the lag is 1 to rounding
+    (:data:`PLAY_TAIL`)."""
+    if tau <= 0.0:
+        return tau
+    u = tau * act[PLAY_INV_DTAU]
+    if u < PLAY_INTERVALS:
+        return _quintic(act, PLAY_FLOW, u)
+    return 1.0
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def play_time(zeta, act):
+    """The path (in ``I_hyst``) along which the play's flow takes a lag of 0 to ``zeta`` (:func:`play_flow`'s
+    inverse; ``inf`` at and beyond the play's edge, where the lag no longer moves).
+
+    ``integral_0^zeta dv / (1 - v^n) = -log(1 - zeta) / n + R(zeta)``: the logarithm carries the divergence at the
+    edge, and ``R`` is smooth on [0, 1] (a table)."""
+    if zeta <= 0.0:
+        return zeta
+    if zeta >= 1.0:
+        return np.inf
+    return -np.log1p(-zeta) / act[PLAY_N] + _quintic(act, PLAY_TIME, zeta * PLAY_INTERVALS)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def play_step(cur, i_m0, act, cur0, direction, tau0, g0):
+    """The magnetising current at coil current ``cur`` within a step of monotone current that began at ``cur0``,
+    ``i_m0`` in ``direction`` (+1 rising, -1 falling), and the flow's path and lag there (:func:`play_flow`).
+
+    ``tau0`` is the flow's path at the step's start and ``g0`` its lag there as the flow gives it: the increments
+    of the lag are the flow's, so a run of steps adds up to the flow over their whole path (``I_m`` moves with
+    ``I`` less the lag's growth). A current a little against ``direction`` (a stage's overshoot) runs the flow
+    backwards along the same curve."""
+    r = act[I_HYST]
+    sigma = direction * (cur - cur0) * (1.0 / r)
+    tau = tau0 + sigma
+    if tau <= 0.0:
+        # inside the play: the iron stays put
+        return i_m0, tau, tau
+    g = play_flow(tau, act)
+    return i_m0 + direction * r * (sigma - (g - g0)), tau, g
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def magnetisation(cur, i_m0, act, cur0, direction, tau0, g0):
+    """:func:`play_step`'s magnetising current (A)."""
+    return play_step(cur, i_m0, act, cur0, direction, tau0, g0)[0]
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def play_start(x, act, u, ext, mode, direction):
+    """The play's step state at a restart at state ``x`` (input ``u``, amplifier mode ``mode``): the current's
+    direction (its rate's sign; ``direction`` kept where the rate is 0), the current, and the flow's path and lag
+    of the lag ``zeta = direction (I - I_m) / I_hyst`` (:func:`play_step`). No play: the direction and current."""
+    i0 = int(act[STATE])
+    cur = x[i0 + CURRENT]
+    rate = _coil_voltage(cur, u, ext, act, mode) - act[R_COIL] * cur
+    if rate > 0.0:
+        direction = 1.0
+    elif rate < 0.0:
+        direction = -1.0
+    if act[I_HYST] <= 0.0:
+        return direction, cur, 0.0, 0.0
+    tau = play_time(direction * (cur - x[i0 + MAGNETISATION]) * (1.0 / act[I_HYST]), act)
+    return direction, cur, tau, play_flow(tau, act)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def play_event(cur, v, act, direction):
+    """The play's event function (V): >= 0 while the coil current moves in ``direction`` (within
+    :data:`PLAY_TURN`) at coil voltage ``v``. A step must not contain a turn of the current: the magnetisation is
+    a function of the current only along a monotone path (always 1 without a play)."""
+    if act[I_HYST] <= 0.0:
+        return 1.0
+    return direction * (v - act[R_COIL] * cur) + PLAY_TURN
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
@@ -292,6 +382,19 @@ def amplifier_mode(x, act, u):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
+def _coil_voltage(cur, u, ext, act, mode):
+    """The voltage (V) that drives the coil at current ``cur``: the DC amplifier's in its ``mode``, or in PWM mode the
+    supply's or, in the period's low part (``ext`` holds the level), the freewheel diode's (about 0 V)."""
+    if act[MODE] == PWM:
+        return act[V_SUP] if ext[int(act[PWM_EXT])] > 0.5 else 0.0
+    if mode == SATURATED:
+        return act[V_SUP]
+    if mode == FREEWHEEL:
+        return -act[R_FW] * cur  # output transistor blocks: freewheel
+    return _regulator_voltage(cur, u, act)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
 def amplifier_event(cur, u, act, mode):
     """The amplifier's event function: >= 0 while ``mode`` holds (the controller's voltage within the
     stage's range, above it, or below zero). PWM: 1 (its edges are time events)."""
@@ -311,7 +414,8 @@ def _range_margin(v, act, mode):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE, piston=AT_STOP):
+def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE, piston=AT_STOP, cur0=0.0, direction=1.0, tau0=0.0,
+             g0=0.0):
     """Write the actuator's state rates into ``dx``; return (force on the stem, clutch normal force,
     the actuator's event function, :func:`event`).
 
@@ -319,32 +423,25 @@ def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE, piston=AT_STOP):
     ``mode`` the DC amplifier's (:func:`amplifier_mode`, decided at the last restart: within a step
     the regulating mode's voltage runs on beyond its range until the event is located), ``piston`` the
     piston's (:func:`piston_mode`, likewise: the stroke's compliance holds until its band's edge is located).
+    ``cur0``, ``direction``, ``tau0``, ``g0`` are the play's state at the step's start (:func:`play_step`; the
+    magnetisation's slot of ``x`` holds its value there, and its rate is 0).
     With ``full`` False only the forces are wanted: the pressure derivative is skipped.
     """
     i0 = int(act[STATE])
     cur = x[i0 + CURRENT]
     p = x[i0 + PRESSURE]
     # ---- electronics and coil
-    if act[MODE] == PWM:
-        # low part of a period: the current freewheels through the diode (about 0 V)
-        v = act[V_SUP] if ext[int(act[PWM_EXT])] > 0.5 else 0.0
-        g_amp = 1.0
-    else:
-        v_reg = _regulator_voltage(cur, u, act)
-        g_amp = _range_margin(v_reg, act, mode)
-        if mode == SATURATED:
-            v = act[V_SUP]
-        elif mode == FREEWHEEL:
-            v = -act[R_FW] * cur  # output transistor blocks: freewheel
-        else:
-            v = v_reg
+    v = _coil_voltage(cur, u, ext, act, mode)
+    g_amp = 1.0 if act[MODE] == PWM else _range_margin(_regulator_voltage(cur, u, act), act, mode)
     # constant reciprocals: the divide then runs off the dependency chain of the state
     cur_dot = (v - act[R_COIL] * cur) * (1.0 / act[L_COIL])
     dx[i0 + CURRENT] = cur_dot
-    # ---- magnetisation: a play on the current (hysteresis); none: I_m tracks I exactly
+    # ---- magnetisation: a play on the current (hysteresis), a map of the current within the step; none: I_m
+    # tracks I exactly
     if act[I_HYST] > 0.0:
-        i_m = x[i0 + MAGNETISATION]
-        dx[i0 + MAGNETISATION] = play_rate(cur, cur_dot, i_m, act[I_HYST], act[PLAY_N])
+        i_m = magnetisation(cur, x[i0 + MAGNETISATION], act, cur0, direction, tau0, g0)
+        dx[i0 + MAGNETISATION] = 0.0
+        g_amp = min(g_amp, play_event(cur, v, act, direction))
     else:
         i_m = cur
         dx[i0 + MAGNETISATION] = cur_dot
@@ -409,6 +506,68 @@ def piston_positions(p, act):
 # ---------------------------------------------------------------- packing the record
 
 
+def _quintics(y: np.ndarray, d: np.ndarray, s: np.ndarray, h: float) -> np.ndarray:
+    """The quintic Hermite interpolant of values ``y``, slopes ``d`` and curvatures ``s`` on a grid of spacing ``h``:
+    six power-series coefficients per interval in its local coordinate 0..1 (:func:`_quintic`), flat."""
+    d0, d1, s0, s1 = h * d[:-1], h * d[1:], h * h * s[:-1], h * h * s[1:]
+    a = y[1:] - y[:-1] - d0 - 0.5 * s0
+    b = d1 - d0 - s0
+    c = s1 - s0
+    return np.column_stack([y[:-1], d0, 0.5 * s0, 10.0 * a - 4.0 * b + 0.5 * c, -15.0 * a + 7.0 * b - c,
+                            6.0 * a - 3.0 * b + 0.5 * c]).ravel()
+
+
+def _play_smooth(v: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``r(v) = 1 / (1 - v^n) - 1 / (n (1 - v))``, the smooth part of the play's flow time's integrand, and its
+    slope: ``T / (n S)`` with ``S = sum_{k<n} v^k`` and ``T = sum_{j<n-1} (n - 1 - j) v^j``, free of the cancellation
+    at ``v = 1``."""
+    pw = v[..., None] ** np.arange(n)
+    k = np.arange(n)
+    s_, ds = pw.sum(-1), (k[1:] * pw[..., :-1]).sum(-1)
+    w = (n - 1 - k[:-1]).astype(float)
+    t_, dt_ = (w * pw[..., :-1]).sum(-1), (w[1:] * k[1:-1] * pw[..., :-2]).sum(-1)
+    return t_ / (n * s_), (dt_ * s_ - t_ * ds) / (n * s_ * s_)
+
+
+@functools.lru_cache(maxsize=8)
+def _play_tables(n: int) -> tuple[float, np.ndarray, np.ndarray]:
+    """The play's tables for exponent ``n``: the flow's intervals per unit path, the flow's table (:func:`play_flow`)
+    and the flow time's smooth part's (:func:`play_time`), each :data:`PLAY_INTERVALS` quintic Hermite intervals
+    (values and two derivatives exact).
+
+    ``R`` is summed by 20-point Gauss-Legendre per interval; the flow's nodes solve ``F(zeta) = tau`` by bisection
+    and two Newton steps on the interpolated ``F``; its slopes follow from the flow itself (``1 - zeta^n``).
+    """
+    m = PLAY_INTERVALS
+    h = 1.0 / m
+    xg, wg = np.polynomial.legendre.leggauss(20)
+    edges = np.arange(m + 1) * h
+    r_quad, _ = _play_smooth(edges[:-1, None] + 0.5 * h * (xg + 1.0), n)
+    big_r = np.concatenate([[0.0], np.cumsum(0.5 * h * (r_quad @ wg))])
+    r_edge, dr_edge = _play_smooth(edges, n)
+    time_table = _quintics(big_r, r_edge, dr_edge, h)
+
+    def flow_time(z: np.ndarray) -> np.ndarray:
+        k = np.minimum((z * m).astype(int), m - 1)
+        t = z * m - k
+        c = time_table.reshape(m, 6)[k]
+        return -np.log1p(-z) / n + c[:, 0] + t * (c[:, 1] + t * (c[:, 2] + t * (c[:, 3] + t * (c[:, 4] + t * c[:, 5]))))
+
+    tau = np.arange(m + 1) * (flow_time(np.array([1.0 - PLAY_TAIL]))[0] / m)
+    lo, hi = np.zeros(m + 1), np.full(m + 1, 1.0 - PLAY_TAIL)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        below = flow_time(mid) < tau
+        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+    g = 0.5 * (lo + hi)
+    for _ in range(2):
+        g -= (flow_time(g) - tau) * (1.0 - g**n)
+    g[0], g[-1] = 0.0, 1.0 - PLAY_TAIL
+    slope = 1.0 - g**n
+    flow_table = _quintics(g, slope, -n * g ** (n - 1) * slope, tau[1])
+    return 1.0 / tau[1], flow_table, time_table
+
+
 def stroke_span(params: Params) -> float:
     """Pressure rise (Pa) over the piston's stroke, from the prestress to the kiss point: ``k_reset x_contact / A_p``."""
     h = params.hydraulics
@@ -429,11 +588,12 @@ def pack(params: Params, temp_C: float, config: str = "clutch") -> np.ndarray:
     """
     v, h = params.valve, params.hydraulics
     mu = oil.dynamic_viscosity(temp_C)
-    r = np.zeros(N_ACT)
+    r = np.zeros(RECORD_SIZE)
     r[V_SUP], r[R_COIL], r[L_COIL], r[R_FW] = v.V_supply, v.R_coil, v.L_coil, v.R_freewheel
     r[K_AMP], r[G_CURRENT] = v.amp_gain, v.g_current
     r[K_F1], r[K_F2], r[F_PRE], r[A_FB] = v.k_F1, v.k_F2, v.F_preload, v.A_fb
     r[I_HYST], r[I_SAT], r[PLAY_N] = v.I_hyst, v.I_sat, v.play_exponent
+    r[PLAY_INV_DTAU], r[PLAY_FLOW:PLAY_TIME], r[PLAY_TIME:] = _play_tables(int(v.play_exponent))
     r[OVERLAP], r[X_PORT], r[CDW] = v.overlap, v.x_port, v.C_d * v.port_width
     # Merritt's steady flow force, jet angle 69 degrees
     r[K_FLOW] = v.flow_force * 2.0 * v.C_d * v.port_width * np.cos(np.radians(69.0))

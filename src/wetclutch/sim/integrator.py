@@ -2,8 +2,9 @@
 
 In every interval between events the modes are fixed and the ODE is smooth. Events
 (slip through zero, constraint torque beyond the static capacity, capacity through zero,
-gear power-flow reversal, the valve amplifier leaving its regulating range) are located on
-the dense output by the Illinois method; a slip that dips through zero and back within one
+gear power-flow reversal, the valve amplifier leaving its regulating range, the coil current
+turning, along whose monotone path the magnet's play is a map) are located on the dense output
+by the Illinois method; a slip that dips through zero and back within one
 step is caught at its least value; the
 state is taken on the violated side of the root and the modes are re-decided there
 (:func:`wetclutch.sim.modes.settle`). Time events (steps and ramp corners of the
@@ -24,9 +25,10 @@ from .compiled import jit, jit_inline
 from .dopri import C, component, dense, error_norm, stage, weights
 from .modes import forget, settle, stale
 from .rhs import copy, events, rhs, rhs_call, static_limit
-from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_AMP, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PISTON, FS_PWM_H,
-                        FS_PWM_NEXT, FS_PWM_START, FS_T, GRIP, IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED,
-                        IS_SETTLE, IS_STEPS, IS_SWITCHES, LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
+from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_AMP, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PISTON, FS_PLAY_CUR,
+                        FS_PLAY_DIR, FS_PLAY_G, FS_PLAY_TAU, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T, GRIP, IS_EVENTS,
+                        IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE, IS_STEPS, IS_SWITCHES, IS_TURNS,
+                        LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
 
 
 @jit_inline
@@ -49,14 +51,29 @@ def _event_value(e, theta_t, t_old, h, y_old, ws, net, ext):
         return ws.clm[j] * _slip_at((theta_t - t_old) / h, j, y_old, h, ws, net)
     a = net.act
     if a.shape[0] > 0 and e == ws.g_old.shape[0] - 1:
-        # the actuator's (the last event function): the coil current, the pressure and the input alone
+        # the actuator's (the last event function): the coil current, the pressure and the input (and the PWM level)
         weights((theta_t - t_old) / h, ws.bw)
         cur = component(y_old, ws.K, h, ws.bw, int(a[act_.STATE]) + act_.CURRENT)
         p = component(y_old, ws.K, h, ws.bw, int(a[act_.STATE]) + act_.PRESSURE)
         u = signals.value(int(a[act_.U_SIG]), theta_t, False, net.sig, net.tab, ext)
-        return act_.event(cur, p, u, a, ws.fstate[FS_AMP], ws.fstate[FS_PISTON])
+        return act_.event(cur, p, u, ext, a, ws.fstate[FS_AMP], ws.fstate[FS_PISTON], ws.fstate[FS_PLAY_DIR])
     _eval_at(theta_t, t_old, h, y_old, ws, net, ext)
     return ws.g_new[e]
+
+
+@jit_inline
+def _play_on(ws, net):
+    """At a step's end or a located event (``ws.x`` there): the magnet's magnetisation, which the step kept at its
+    start, into its state slot as the play's map of the current gives it, and the play's flow moved on to here."""
+    a = net.act
+    if a.shape[0] == 0 or a[act_.I_HYST] <= 0.0:
+        return
+    k = int(a[act_.STATE])
+    f = ws.fstate
+    cur = ws.x[k + act_.CURRENT]
+    ws.x[k + act_.MAGNETISATION], f[FS_PLAY_TAU], f[FS_PLAY_G] = act_.play_step(
+        cur, ws.x[k + act_.MAGNETISATION], a, f[FS_PLAY_CUR], f[FS_PLAY_DIR], f[FS_PLAY_TAU], f[FS_PLAY_G])
+    f[FS_PLAY_CUR] = cur
 
 
 @jit_inline
@@ -72,6 +89,14 @@ def _emit(t, y, known, ws, net, ext, out_t, out_x, out_aux, out_mode):
         aux = ws.aux_new
     out_t[i] = t
     copy(out_x[i], y)
+    a = net.act
+    if a.shape[0] > 0 and a[act_.I_HYST] > 0.0:
+        # the step holds the magnetisation at its start: the row's is the play's map of the row's current
+        k = int(a[act_.STATE])
+        f = ws.fstate
+        out_x[i, k + act_.MAGNETISATION] = act_.magnetisation(y[k + act_.CURRENT], y[k + act_.MAGNETISATION], a,
+                                                              f[FS_PLAY_CUR], f[FS_PLAY_DIR], f[FS_PLAY_TAU],
+                                                              f[FS_PLAY_G])
     copy(out_aux[i], aux)
     for j in range(ws.clm.shape[0]):
         out_mode[i, j] = ws.clm[j]
@@ -421,6 +446,7 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
                    out_t, out_x, out_aux, out_mode)
         if t_ev != np.inf:
             dense(y_old, ws.K, h, (t_ev - t) / h, ws.x, ws.bw)
+            _play_on(ws, net)
             scale = max(1.0, abs(t))
             if t_ev - t <= SOON * scale:
                 # the event came at once after the restart before it (progress within a thousand times the
@@ -441,12 +467,16 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
             ws.fstate[FS_T] = t
             ws.istate[IS_EVENTS] += 1
             ws.istate[IS_LAST_EVENT] = e_ev
+            direction = ws.fstate[FS_PLAY_DIR]
             if not _restart(ws, net, ext):
                 return ERR_SINGULAR
+            if ws.fstate[FS_PLAY_DIR] != direction:
+                ws.istate[IS_TURNS] += 1
             continue
         stalls = 0
         soon = 0
         copy(ws.x, ws.y_new)
+        _play_on(ws, net)
         t = t_new
         ws.fstate[FS_T] = t
         fac = _next_step(h, log_err, at_lim, ws)

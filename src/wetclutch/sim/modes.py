@@ -18,7 +18,8 @@ from ..physics import actuator as act_
 from . import signals
 from .compiled import jit, jit_inline
 from .rhs import LIM_MAX, LIM_MIN, capacity, hold_margins, rate_command, ratio, rhs_call, slip, static_limit
-from .workspace import FREE, FS_AMP, FS_PISTON, IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets, fs_grip, fs_ratio
+from .workspace import (FREE, FS_AMP, FS_PISTON, FS_PLAY_CUR, FS_PLAY_DIR, FS_PLAY_G, FS_PLAY_TAU, IS_REDUNDANT,
+                        LOCKED, NO_MODE, STUCK, aux_offsets, fs_grip, fs_ratio)
 
 
 @jit_inline
@@ -237,7 +238,7 @@ def _lock_backsliding(x, dx, net, clm, released):
 @jit
 def settle(t, net, ext, ws):
     """Decide consistent modes at time ``t`` for the workspace's state; project newly locked speeds. The valve
-    amplifier's mode follows from the state and the input alone.
+    amplifier's mode and the direction of its coil current follow from the state and the input alone.
 
     Uses ``ws.x``, ``ws.clm``, ``ws.grm`` (updated), ``ws.dx``, ``ws.aux`` and the constraint
     buffers. Returns -1 if the system is singular, 1 if ``ws.dx`` and ``ws.aux`` are those of the
@@ -255,6 +256,9 @@ def settle(t, net, ext, ws):
         u = signals.value(int(net.act[act_.U_SIG]), t, False, net.sig, net.tab, ext)
         ws.fstate[FS_AMP] = act_.amplifier_mode(x, net.act, u)
         ws.fstate[FS_PISTON] = act_.piston_mode(x[int(net.act[act_.STATE]) + act_.PRESSURE], net.act)
+        # the magnet's play: the current's direction and the play's flow from here on
+        (ws.fstate[FS_PLAY_DIR], ws.fstate[FS_PLAY_CUR], ws.fstate[FS_PLAY_TAU],
+         ws.fstate[FS_PLAY_G]) = act_.play_start(x, net.act, u, ext, ws.fstate[FS_AMP], ws.fstate[FS_PLAY_DIR])
     # a clutch or gear released in this settle must not be re-locked (no cycling)
     released[:] = 0
     redundant = False

@@ -412,7 +412,8 @@ class Trajectory:
                    events=ws.evlog[:n_ev].copy(),
                    locks=ws.fstate[wsp.FS_LOCKS:wsp.fs_ratio.py_func(len(network.clutches))].reshape(-1, 2).copy(),
                    stats={"steps": int(ws.istate[wsp.IS_STEPS]), "rejected": int(ws.istate[wsp.IS_REJECTED]),
-                          "events": int(ws.istate[wsp.IS_EVENTS]), "mode_switches": int(ws.istate[wsp.IS_SWITCHES])})
+                          "events": int(ws.istate[wsp.IS_EVENTS]), "mode_switches": int(ws.istate[wsp.IS_SWITCHES]),
+                          "turns": int(ws.istate[wsp.IS_TURNS])})
 
     def _idx(self, items: list, name: str) -> int:
         for i, it in enumerate(items):
@@ -541,7 +542,8 @@ def _event_source(network: Network, e: int, n_events: int) -> str:
         return f"clutch {network.clutches[e // 2].name!r}"
     ng = len(network.gears)
     if network.act is not None and e == n_events - 1:
-        return "the valve actuator (its amplifier's regulating range, the clutch piston's stop and contact)"
+        return ("the valve actuator (its amplifier's regulating range, its coil current's turns, the clutch piston's "
+                "stop and contact)")
     if e >= 2 * nc + 2 * ng:
         return f"gear {network.gears[e - 2 * nc - 2 * ng].name!r} (its ratio limits)"
     if e >= 2 * nc:

@@ -33,8 +33,9 @@ from ..physics import thermal as th_
 from . import signals
 from .compiled import jit, jit_inline
 from .linalg import lu_factor, lu_solve, svd_jacobi
-from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, FS_AMP, FS_AMP_G, FS_PISTON, IS_BAD_BODY,
-                        IS_REDUNDANT, LOCKED, STUCK, aux_offsets, fs_grip, fs_ratio)
+from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, FS_AMP, FS_AMP_G, FS_PISTON, FS_PLAY_CUR,
+                        FS_PLAY_DIR, FS_PLAY_G, FS_PLAY_TAU, IS_BAD_BODY, IS_REDUNDANT, LOCKED, STUCK, aux_offsets,
+                        fs_grip, fs_ratio)
 
 # columns of NetArrays.gr_lim: a moving ratio's limits and its rate limit (1/s)
 LIM_MIN, LIM_MAX, LIM_RATE = 0, 1, 2
@@ -429,7 +430,9 @@ def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
         # (here, not in a helper of its own: each level of inlining copies the actuator's whole IR once more)
         u = signals.value(int(net.act[act_.U_SIG]), t, left, net.sig, net.tab, ext)
         f_stem, _, ws.fstate[FS_AMP_G] = act_.evaluate(x, net.act, u, ext, dx, full, ws.fstate[FS_AMP],
-                                                       ws.fstate[FS_PISTON])
+                                                       ws.fstate[FS_PISTON], ws.fstate[FS_PLAY_CUR],
+                                                       ws.fstate[FS_PLAY_DIR], ws.fstate[FS_PLAY_TAU],
+                                                       ws.fstate[FS_PLAY_G])
         stem = int(net.act[act_.STEM_BODY])
         z[stem] += f_stem
         p_src += f_stem * x[stem]

@@ -41,9 +41,12 @@ FS_PWM_NEXT = 3  # time of the next PWM edge (-inf: not started)
 FS_PWM_START = 4  # start of the current PWM period
 FS_PWM_H = 5  # + level (0 or 1): the first step after the last edge to that level (0: none yet)
 FS_AMP = 7  # the valve amplifier's mode (actuator.REGULATE, SATURATED, FREEWHEEL; decided at restarts)
-FS_AMP_G = 8  # the actuator's event function (amplifier and piston) at the last evaluation of the right-hand side
+FS_AMP_G = 8  # the actuator's event function (amplifier, play and piston) at the last evaluation of the right-hand side
 FS_PISTON = 9  # the clutch piston's mode (actuator.AT_STOP, STROKING, AT_PLATES; decided at restarts)
-FS_LOCKS = 10  # + 2 j + LOCK_FIRST / LOCK_LAST: first and last time clutch j locked (-1: never)
+# the magnet's play at the current step's start (actuator.play_step; its magnetisation is the state's slot): the coil
+# current, its direction (+1 rising, -1 falling; decided at restarts), the play's flow path and its lag there
+FS_PLAY_CUR, FS_PLAY_DIR, FS_PLAY_TAU, FS_PLAY_G = 10, 11, 12, 13
+FS_LOCKS = 14  # + 2 j + LOCK_FIRST / LOCK_LAST: first and last time clutch j locked (-1: never)
 LOCK_FIRST, LOCK_LAST = 0, 1
 N_FSTATE = FS_LOCKS  # without the lock times, which follow, two per clutch, the gears' slots (fs_ratio) and the
 # clutches' grip margins (fs_grip)
@@ -59,7 +62,8 @@ IS_N_LOG = 6  # mode changes logged (may exceed the log's length)
 IS_LAST_EVENT = 7  # event function of the last event
 IS_BAD_BODY = 8  # a body whose motion the network does not determine (-1: none)
 IS_REDUNDANT = 9  # 1: the current constraint factors are the least-norm ones of redundant locks
-N_ISTATE = 10
+IS_TURNS = 10  # located events that were the coil current turning (the engine's, for the magnet's play; in IS_EVENTS)
+N_ISTATE = 11
 
 EVENT_LOG = 4096  # rows of the mode-change log (time, clutch, new mode); later changes are counted, not logged
 
@@ -103,7 +107,7 @@ def moving_gears(net) -> int:
 def n_events(net) -> int:
     """Number of event functions of the compiled network ``net``: two per clutch and per gear, one per moving
     ratio (its limits; none without moving ratios), one for a valve actuator (its amplifier's regulating range, its
-    piston's stop and contact)."""
+    coil current's turns, its piston's stop and contact)."""
     nc, ng = net.cl_a.size, net.gr_in.size
     return 2 * nc + 2 * ng + (ng if moving_gears(net) else 0) + (1 if net.act.size else 0)
 
@@ -162,6 +166,7 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
     fstate = np.zeros(N_FSTATE + 3 * nc + 3 * ng)
     fstate[FS_T], fstate[FS_H], fstate[FS_LOG_ERR] = t0, h0, np.log(1e-4)
     fstate[FS_PWM_NEXT], fstate[FS_PWM_START] = -np.inf, t0
+    fstate[FS_PLAY_DIR] = 1.0
     fstate[FS_LOCKS:FS_LOCKS + 2 * nc] = -1.0
     fstate[FS_LOCKS + 2 * nc:FS_LOCKS + 2 * nc + ng] = np.nan  # no factors made yet
     istate = np.zeros(N_ISTATE, dtype=np.int64)
