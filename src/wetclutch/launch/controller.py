@@ -977,6 +977,14 @@ def start_inertia(ctrl: np.ndarray, learnt: float | None) -> float:
     return float(ctrl[J_1]) if learnt is None else learnt
 
 
+def crept(ctrl: np.ndarray, cs: np.ndarray, creep_Nm: float) -> bool:
+    """Whether a launch's plates pushed the waiting vehicle beyond ``creep_limit``: its standby creep ``creep_Nm``
+    (the mean measured ``T_r`` over the last 0.2 s before the request) above the limit and more than
+    :data:`PLATE_NM` above the open plates' drag (the least torque seen in the hold), which a hold further below the
+    kiss point would not take away."""
+    return bool(creep_Nm > ctrl[CREEP_LIMIT] and creep_Nm - cs[CS_TMIN] > PLATE_NM)
+
+
 def output_inertia(cs: np.ndarray) -> float | None:
     """The clutch output's inertia (kg m^2) a launch measured (see :data:`EST_N`), or None where its window was not
     full or the output's acceleration too small to show it."""

@@ -304,10 +304,11 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     learnt = adaptation or Adaptation()
     start = learnt.kiss(temp) if d.kind == "launch" else None
     inertia = control.start_inertia(ctrl, learnt.inertia) if d.kind == "launch" else None
+    margin = learnt.hold_margin(temp) if d.kind == "launch" else None
     cs = control.initial_state(d.settings["p_kiss"] if start is None else start, start is not None,
                                learnt.friction_factor(temp) if d.kind == "launch" else None,
                                learnt.friction_slope(temp) if d.kind == "launch" else None, inertia or 0.0,
-                               learnt.hold_margin(temp) if d.kind == "launch" else 0.0)
+                               margin or 0.0)
     t_after = cond.t_after + (cond.hold_time if cond.post_sync_hold else 0.0)
     coldstart.begin(net, ext, ws)
     zf, lock, m = np.zeros((N_CH, 2)), np.full(1, -1.0), 0
@@ -352,8 +353,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     summary.update(T_plate_peak_C=t_peak, T_plate_limit_C=limit, T_plate_over_limit=bool(t_peak > limit))
     found = float(cs[control.CS_KISS]) if d.kind == "launch" and cs[control.CS_FOUND] else None
     kiss_start = (d.settings["p_kiss"] if start is None else start) if d.kind == "launch" else None
-    summary.update(kiss_start_Pa=kiss_start, kiss_found_Pa=found,
-                   hold_margin_Pa=learnt.hold_margin(temp) if d.kind == "launch" else None)
+    summary.update(kiss_start_Pa=kiss_start, kiss_found_Pa=found, hold_margin_Pa=margin)
     friction = (float(cs[control.CS_THETA_LEARNT]) if d.kind == "launch" and cs[control.CS_THETA_N] >= control.THETA_LEARN_N
                 else None)
     summary.update(friction_factor_start=learnt.friction_factor(temp) if d.kind == "launch" else None,
@@ -367,11 +367,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     measured = control.output_inertia(cs) if d.kind == "launch" else None
     summary.update(output_inertia_start_kg_m2=inertia, output_inertia_found_kg_m2=measured)
     if found is not None:
-        # beyond the limit, and by the plates: the open plates' drag alone (the least torque seen in the hold) is
-        # not what a hold further below the kiss point would take away
-        creep = resp.creep_Nm
-        crept = bool(creep > ctrl[control.CREEP_LIMIT] and creep - cs[control.CS_TMIN] > control.PLATE_NM)
-        learnt = learnt.learn(temp, found, friction, slope, measured, crept)
+        learnt = learnt.learn(temp, found, friction, slope, measured, control.crept(ctrl, cs, resp.creep_Nm))
     return LaunchResult(signals, truth, summary, cond, d.kind, tr.stats, found, learnt)
 
 

@@ -36,7 +36,7 @@ rises with ``L/R``; when the controller asks for a negative voltage the output
 transistor blocks and the current decays through the freewheel circuit with
 ``L/(R + R_freewheel)``. These are the amplifier's three modes (regulating,
 saturated, freewheeling): the coil voltage jumps where the freewheel circuit takes
-over, so the engine switches them at located events (:func:`amplifier_event`), as it
+over, so the engine switches them at located events (:func:`amplifier`), as it
 does a clutch's, and never inside a step. In PWM mode the coil sees the supply voltage during the
 high part of each period and freewheels through a diode during the low part, so
 the mean current is about ``duty * V_supply / R_coil``.
@@ -205,11 +205,10 @@ def _with_piston(g_amp, p, act, piston):
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
 def event(cur, p, u, ext, act, amp_mode, piston, direction):
-    """The actuator's event function: the amplifier's (:func:`amplifier_event`), the play's (:func:`play_event`,
-    the current moving in ``direction``) and the piston's (:func:`piston_event`), whichever is nearer its switch."""
-    g = min(amplifier_event(cur, u, act, amp_mode), play_event(cur, _coil_voltage(cur, u, ext, act, amp_mode), act,
-                                                                direction))
-    return _with_piston(g, p, act, piston)
+    """The actuator's event function: the amplifier's (:func:`amplifier`), the play's (:func:`play_event`, the
+    current moving in ``direction``) and the piston's (:func:`piston_event`), whichever is nearer its switch."""
+    v, g_amp = amplifier(cur, u, ext, act, amp_mode)
+    return _with_piston(min(g_amp, play_event(cur, v, act, direction)), p, act, piston)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
@@ -296,7 +295,7 @@ def play_start(x, act, u, ext, mode, direction):
     of the lag ``zeta = direction (I - I_m) / I_hyst`` (:func:`play_step`). No play: the direction and current."""
     i0 = int(act[STATE])
     cur = x[i0 + CURRENT]
-    rate = _coil_voltage(cur, u, ext, act, mode) - act[R_COIL] * cur
+    rate = amplifier(cur, u, ext, act, mode)[0] - act[R_COIL] * cur
     if rate > 0.0:
         direction = 1.0
     elif rate < 0.0:
@@ -382,30 +381,26 @@ def amplifier_mode(x, act, u):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def _coil_voltage(cur, u, ext, act, mode):
-    """The voltage (V) that drives the coil at current ``cur``: the DC amplifier's in its ``mode``, or in PWM mode the
-    supply's or, in the period's low part (``ext`` holds the level), the freewheel diode's (about 0 V)."""
+def amplifier(cur, u, ext, act, mode):
+    """(the voltage (V) that drives the coil at current ``cur``, the amplifier's event function).
+
+    The voltage is the DC amplifier's in its ``mode``, or in PWM mode the supply's or, in the period's low part
+    (``ext`` holds the level), the freewheel diode's (about 0 V). The event function is >= 0 while ``mode`` holds (the
+    controller's voltage within the stage's range, above it, or below zero); PWM: 1 (its edges are time events)."""
     if act[MODE] == PWM:
-        return act[V_SUP] if ext[int(act[PWM_EXT])] > 0.5 else 0.0
+        return (act[V_SUP] if ext[int(act[PWM_EXT])] > 0.5 else 0.0), 1.0
+    v_reg = _regulator_voltage(cur, u, act)
+    g = _range_margin(v_reg, act, mode)
     if mode == SATURATED:
-        return act[V_SUP]
+        return act[V_SUP], g
     if mode == FREEWHEEL:
-        return -act[R_FW] * cur  # output transistor blocks: freewheel
-    return _regulator_voltage(cur, u, act)
-
-
-@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def amplifier_event(cur, u, act, mode):
-    """The amplifier's event function: >= 0 while ``mode`` holds (the controller's voltage within the
-    stage's range, above it, or below zero). PWM: 1 (its edges are time events)."""
-    if act[MODE] == PWM:
-        return 1.0
-    return _range_margin(_regulator_voltage(cur, u, act), act, mode)
+        return -act[R_FW] * cur, g  # output transistor blocks: freewheel
+    return v_reg, g
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
 def _range_margin(v, act, mode):
-    """The DC amplifier's event function at the controller's voltage ``v`` (:func:`amplifier_event`)."""
+    """The DC amplifier's event function at the controller's voltage ``v`` (:func:`amplifier`)."""
     if mode == SATURATED:
         return v - act[V_SUP]
     if mode == FREEWHEEL:
@@ -431,8 +426,7 @@ def evaluate(x, act, u, ext, dx, full=True, mode=REGULATE, piston=AT_STOP, cur0=
     cur = x[i0 + CURRENT]
     p = x[i0 + PRESSURE]
     # ---- electronics and coil
-    v = _coil_voltage(cur, u, ext, act, mode)
-    g_amp = 1.0 if act[MODE] == PWM else _range_margin(_regulator_voltage(cur, u, act), act, mode)
+    v, g_amp = amplifier(cur, u, ext, act, mode)
     # constant reciprocals: the divide then runs off the dependency chain of the state
     cur_dot = (v - act[R_COIL] * cur) * (1.0 / act[L_COIL])
     dx[i0 + CURRENT] = cur_dot
