@@ -28,7 +28,7 @@ def engage_default() -> wc.Result:
 
 
 def _refused(args: Sequence[str], fragment: str, out: Path) -> subprocess.CompletedProcess:
-    r = subprocess.run([sys.executable, "-m", "wetclutch.cli", *args, "--out", str(out)],
+    r = subprocess.run([sys.executable, "-m", "wetclutch", *args, "--out", str(out)],
                        capture_output=True, text=True, check=False)
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()

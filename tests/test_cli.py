@@ -14,7 +14,7 @@ from wetclutch.cli import main
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "wetclutch.cli", *args], capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "wetclutch", *args], capture_output=True, text=True)
 
 
 def test_simulate_engage_writes_outputs(tmp_path, engage_default):

@@ -39,7 +39,7 @@ DT = 1e-3
 
 
 def _export(out: Path, *args: str) -> Path:
-    r = subprocess.run([sys.executable, "-m", "wetclutch.cli", "export-fmu", "--out", str(out), *args],
+    r = subprocess.run([sys.executable, "-m", "wetclutch", "export-fmu", "--out", str(out), *args],
                        capture_output=True, text=True, check=False)
     assert r.returncode == 0, r.stderr
     return out

@@ -29,7 +29,7 @@ CHROMIUM = "/usr/bin/chromium"
 
 
 def _cli(*args: str) -> None:
-    r = subprocess.run([sys.executable, "-m", "wetclutch.cli", *args], capture_output=True, text=True, check=False)
+    r = subprocess.run([sys.executable, "-m", "wetclutch", *args], capture_output=True, text=True, check=False)
     assert r.returncode == 0, r.stderr
 
 

@@ -549,7 +549,7 @@ def test_random_corruptions_never_crash(small_csv, tmp_path_factory, ext, kind, 
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "wetclutch.cli", *args], capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "wetclutch", *args], capture_output=True, text=True)
 
 
 def test_cli_identify_writes_outputs_and_a_loadable_param_file(rig_data, tmp_path):

@@ -78,7 +78,7 @@ def test_bad_rig_options(tmp_path, cli_refuses, args, fragment):
 
 def test_calibration_report_cli(tmp_path):
     out = tmp_path / "cal"
-    r = subprocess.run([sys.executable, "-m", "wetclutch.cli", "calibration-report", "--out", str(out)],
+    r = subprocess.run([sys.executable, "-m", "wetclutch", "calibration-report", "--out", str(out)],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     rep = json.loads((out / "report.json").read_text())

@@ -481,6 +481,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())
