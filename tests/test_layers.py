@@ -15,7 +15,8 @@ import wetclutch
 
 PKG = Path(wetclutch.__file__).resolve().parent
 #: layer of each subpackage along the data path; the base modules (errors, params, output, the numba cache
-#: keeper) sit below all, the command line (``cli``, and ``__main__`` that runs it) and the package's front door above all
+#: keeper) sit below all, the command line (``cli``, and ``__main__`` that runs it) and the package's front
+#: door above all
 LAYERS = {"physics": 1, "sim": 2, "plant": 3, "rig": 4, "ident": 5, "launch": 6, "fmi": 7, "report": 8}
 BASE = {"errors", "params", "output", "_jitcache"}
 TOP = {"cli", "__main__"}
