@@ -206,12 +206,20 @@ def _step_limit(t, t_stop, h_max, bp_i, pwm, ws, net):
 
 
 @jit_inline
-def _sliding(e, ws, net):
-    """The clutch whose slip through zero is event ``e`` while it slides (-1: ``e`` is another event)."""
+def _slide_end(e, ws, net):
+    """The clutch (one-way clutches included) whose slip through zero is event ``e`` while it slides (-1: ``e`` is
+    another event)."""
     j = e // 2
-    if e < 2 * net.cl_a.shape[0] and e % 2 == 0 and net.cl_oneway[j] == 0 and (ws.clm[j] == 1 or ws.clm[j] == -1):
+    if e < 2 * net.cl_a.shape[0] and e % 2 == 0 and (ws.clm[j] == 1 or ws.clm[j] == -1):
         return j
     return -1
+
+
+@jit_inline
+def _sliding(e, ws, net):
+    """As :func:`_slide_end`, but not a one-way clutch (whose slip stays on one side)."""
+    j = _slide_end(e, ws, net)
+    return j if j >= 0 and net.cl_oneway[j] == 0 else -1
 
 
 @jit_inline
@@ -339,11 +347,9 @@ def _grazing(e_ev, soon, ws, net):
     """An event at once after a restart (the ``soon``-th in a row, :data:`SOON`): a clutch that slid off from
     zero slip and at once turned back, twice: its torque only grazed its capacity. The restart locks it; its
     grip margin keeps it locked until a real breakaway."""
-    nc = net.cl_a.shape[0]
-    if soon >= 2 and e_ev < 2 * nc and e_ev % 2 == 0:
-        j = e_ev // 2
-        if ws.clm[j] == 1 or ws.clm[j] == -1:
-            ws.fstate[fs_grip(nc, net.gr_in.shape[0]) + j] = GRIP
+    j = _slide_end(e_ev, ws, net) if soon >= 2 else -1
+    if j >= 0:
+        ws.fstate[fs_grip(net.cl_a.shape[0], net.gr_in.shape[0]) + j] = GRIP
 
 
 #: a slide whose slip, from zero at its step's start, cannot have left this share of its speed's absolute tolerance
