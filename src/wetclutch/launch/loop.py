@@ -36,7 +36,7 @@ from ..sim.integrator import advance
 from ..sim.network import Trajectory, failure, outputs
 from ..sim.rhs import ratio, spring_torque
 from ..sim.signals import External
-from ..sim.workspace import IS_REJECTED, IS_SETTLE, IS_STEPS, LOCKED, OK, new_workspace
+from ..sim.workspace import IS_REJECTED, IS_SETTLE, IS_STEPS, LOCKED, OK, SETTLE_ALL, SETTLE_INPUT, new_workspace
 from . import controller as control
 from . import design as design_
 from . import metrics, ratio_hold
@@ -124,7 +124,8 @@ def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, ho
             ext[u_slot + 1] = ratio_hold.step(hold, hs, meas, t_ref[k], cs[control.CS_PHASE] >= control.TORQUE)
         out_u[k] = u
         ext[u_slot] = u
-        ws.istate[IS_SETTLE] = 1
+        # a new valve input alone moves no force at once; the ratio hold's rate moves the CVT's
+        ws.istate[IS_SETTLE] = SETTLE_INPUT if hold.shape[0] == 0 and k > 0 else SETTLE_ALL
         status = advance(net, ext, ws, (k + 1) * dt, dt, 0.0, rtol, atol, np.inf, out_t, out_x, out_aux, out_mode)
         if status != OK:
             return status, k

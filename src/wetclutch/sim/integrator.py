@@ -23,12 +23,13 @@ from ..physics import actuator as act_
 from . import signals
 from .compiled import jit, jit_inline
 from .dopri import C, component, dense, error_norm, stage, weights
-from .modes import forget, settle, stale
+from .modes import forget, input_modes, settle, stale
 from .rhs import copy, events, rhs, rhs_call, static_limit
 from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_AMP, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PISTON, FS_PLAY_CUR,
                         FS_PLAY_DIR, FS_PLAY_G, FS_PLAY_TAU, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T, GRIP, IS_EVENTS,
                         IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE, IS_STEPS, IS_SWITCHES, IS_TURNS,
-                        LOCK_FIRST, LOCK_LAST, LOCKED, OK, UNDECIDED, fs_grip)
+                        LOCK_FIRST, LOCK_LAST, LOCKED, OK, SETTLE_ALL, SETTLE_INPUT, UNDECIDED,
+                        fs_grip)
 
 
 @jit_inline
@@ -122,6 +123,19 @@ def _log_modes(t, before, ws):
                 ws.fstate[FS_LOCKS + 2 * j + LOCK_LAST] = t
 
 
+@jit_inline
+def _first_stage(t, ws, net, ext, fresh):
+    """Evaluate the first stage at the restart's state (``fresh``: ``ws.dx`` and ``ws.aux`` are not yet the decided
+    modes' own) and the event functions there."""
+    if fresh and not rhs_call(t, ws.x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, ws.clm, ws.grm), bool(True)):
+        forget(ws.fact)
+        return False
+    copy(ws.K[0], ws.dx)
+    events(ws.x, ws.aux, net, ws.clm, ws.grm, ws.g_old, ws.fstate)
+    ws.istate[IS_SETTLE] = 0
+    return True
+
+
 @jit
 def _restart(ws, net, ext):
     """Re-decide modes at the current time and refresh the first stage."""
@@ -132,13 +146,17 @@ def _restart(ws, net, ext):
         return False
     _log_modes(t, ws.clm_before, ws)
     # the mode decision's last evaluation is the first stage, unless it ended on a change
-    if decided == 0 and not rhs_call(t, ws.x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, ws.clm, ws.grm), bool(True)):
-        forget(ws.fact)
-        return False
-    copy(ws.K[0], ws.dx)
-    events(ws.x, ws.aux, net, ws.clm, ws.grm, ws.g_old, ws.fstate)
-    ws.istate[IS_SETTLE] = 0
-    return True
+    return _first_stage(t, ws, net, ext, decided == 0)
+
+
+@jit
+def _restart_input(ws, net, ext):
+    """Re-decide after a jump of the valve's input alone (:data:`~wetclutch.sim.workspace.SETTLE_INPUT`): the
+    amplifier's mode and the coil current's direction; then refresh the first stage."""
+    t = ws.fstate[FS_T]
+    if net.act.shape[0] > 0:
+        input_modes(t, net, ext, ws)
+    return _first_stage(t, ws, net, ext, True)
 
 
 @jit
@@ -400,7 +418,8 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
     Output rows are written at ``t_out0 + j * dt_out`` for every grid time in
     ``[t, t_stop)``, and at ``t_stop`` itself when it lies on the grid and is the
     last grid time. Calling ``advance`` again continues where it stopped (after a
-    caller has changed ``ext``, set ``ws.istate[IS_SETTLE] = 1`` to re-decide modes).
+    caller has changed ``ext``, set ``ws.istate[IS_SETTLE]`` to ``SETTLE_ALL`` to re-decide modes, or to
+    ``SETTLE_INPUT`` where only the valve's input changed).
 
     ``atol`` holds one absolute tolerance per state.
 
@@ -416,8 +435,11 @@ def advance(net, ext, ws, t_stop, dt_out, t_out0, rtol, atol, h_max, out_t, out_
     after_edge = -1  # level of the PWM edge the next accepted step follows (-1: none)
     if pwm and ws.fstate[FS_PWM_NEXT] == -np.inf:
         after_edge = _pwm_edge(t, ws, net, ext)
-        ws.istate[IS_SETTLE] = 1
-    if ws.istate[IS_SETTLE] != 0:
+        ws.istate[IS_SETTLE] = SETTLE_ALL
+    if ws.istate[IS_SETTLE] == SETTLE_INPUT:
+        if not _restart_input(ws, net, ext):
+            return ERR_SINGULAR
+    elif ws.istate[IS_SETTLE] != 0:
         if not _restart(ws, net, ext):
             return ERR_SINGULAR
     while t < t_stop:

@@ -235,6 +235,16 @@ def _lock_backsliding(x, dx, net, clm, released):
     return changed
 
 
+@jit_inline
+def input_modes(t, net, ext, ws):
+    """The valve amplifier's mode and the direction of its coil current (the magnet's play's flow from here on),
+    from the state and the valve's input alone."""
+    u = signals.value(int(net.act[act_.U_SIG]), t, False, net.sig, net.tab, ext)
+    ws.fstate[FS_AMP] = act_.amplifier_mode(ws.x, net.act, u)
+    (ws.fstate[FS_PLAY_DIR], ws.fstate[FS_PLAY_CUR], ws.fstate[FS_PLAY_TAU],
+     ws.fstate[FS_PLAY_G]) = act_.play_start(ws.x, net.act, u, ext, ws.fstate[FS_AMP], ws.fstate[FS_PLAY_DIR])
+
+
 @jit
 def settle(t, net, ext, ws):
     """Decide consistent modes at time ``t`` for the workspace's state; project newly locked speeds. The valve
@@ -253,12 +263,8 @@ def settle(t, net, ext, ws):
     ng = net.gr_in.shape[0]
     _first_guess(t, x, net, ext, clm, grm)
     if net.act.shape[0] > 0:
-        u = signals.value(int(net.act[act_.U_SIG]), t, False, net.sig, net.tab, ext)
-        ws.fstate[FS_AMP] = act_.amplifier_mode(x, net.act, u)
+        input_modes(t, net, ext, ws)
         ws.fstate[FS_PISTON] = act_.piston_mode(x[int(net.act[act_.STATE]) + act_.PRESSURE], net.act)
-        # the magnet's play: the current's direction and the play's flow from here on
-        (ws.fstate[FS_PLAY_DIR], ws.fstate[FS_PLAY_CUR], ws.fstate[FS_PLAY_TAU],
-         ws.fstate[FS_PLAY_G]) = act_.play_start(x, net.act, u, ext, ws.fstate[FS_AMP], ws.fstate[FS_PLAY_DIR])
     # a clutch or gear released in this settle must not be re-locked (no cycling)
     released[:] = 0
     redundant = False

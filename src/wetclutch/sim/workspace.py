@@ -52,7 +52,13 @@ N_FSTATE = FS_LOCKS  # without the lock times, which follow, two per clutch, the
 # clutches' grip margins (fs_grip)
 
 # istate: the integer part
-IS_SETTLE = 0  # modes must be re-decided before the next step
+IS_SETTLE = 0  # what must be decided again before the next step: nothing (0), SETTLE_ALL or SETTLE_INPUT
+#: every mode (a change of the state or of an input that may move a force at once)
+SETTLE_ALL = 1
+#: the valve amplifier's mode and the coil current's direction only: a jump of the valve's input alone moves no force
+#: at once (the coil's inductance keeps its current, hence the magnet's force and all that follows, continuous), so
+#: no clutch, brake, gear or piston can change its mode there
+SETTLE_INPUT = 2
 IS_N_OUT = 1  # output rows written
 IS_STEPS = 2  # accepted steps
 IS_REJECTED = 3  # rejected steps
