@@ -28,7 +28,7 @@ from ..sim.integrator import advance
 from ..sim.network import failure, outputs
 from ..sim.rhs import rhs_call
 from ..sim.signals import External
-from ..sim.workspace import FS_T, IS_N_OUT, IS_SETTLE, LOCKED, OK, aux_offsets, new_workspace
+from ..sim.workspace import FS_T, IS_N_OUT, IS_SETTLE, LOCKED, OK, SETTLE_ALL, aux_offsets, new_workspace
 
 #: external input slots of the network
 U_SLOT, LOAD_SLOT = 0, 1
@@ -135,7 +135,8 @@ class Plant:
         t = self.time
         if not t_stop > t:
             raise WetclutchError(f"step must end after the model's time {t:g} s (got {t_stop:g} s)")
-        self.ws.istate[IS_SETTLE] = 1
+        # the road load moves a force at once: every mode, not the valve's alone
+        self.ws.istate[IS_SETTLE] = SETTLE_ALL
         self.ws.istate[IS_N_OUT] = 0
         status = advance(self.net, self.ext, self.ws, float(t_stop), float(t_stop - t), t, RTOL, self._atol, np.inf,
                          *self._out)
