@@ -176,7 +176,7 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
     fstate[FS_LOCKS:FS_LOCKS + 2 * nc] = -1.0
     fstate[FS_LOCKS + 2 * nc:FS_LOCKS + 2 * nc + ng] = np.nan  # no factors made yet
     istate = np.zeros(N_ISTATE, dtype=np.int64)
-    istate[IS_SETTLE], istate[IS_LAST_EVENT], istate[IS_BAD_BODY] = 1, -1, -1
+    istate[IS_SETTLE], istate[IS_LAST_EVENT], istate[IS_BAD_BODY] = SETTLE_ALL, -1, -1
     return Workspace(
         x=x0.astype(np.float64).copy(),
         clm=np.full(nc, UNDECIDED, dtype=np.int64),
