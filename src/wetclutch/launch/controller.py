@@ -136,6 +136,14 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       (:data:`REF_RISING`): a torque ahead of it then is a transient (the jolt
       of a contact in cold oil, a heavy clutch output ringing), and wound down
       against it the integrator held the pressure short for 100 to 150 ms.
+    * **Catch-up while the request rises.** The torque lags the rising request
+      by the valve's response and, where the clutch output is heavy, by the
+      time the clutch takes to spin it up. A second integrator (``ki_rise``)
+      takes up that lag while the request rises and gives it back as the
+      torque comes ahead, down to zero at most; after the rise it keeps its
+      value. Folded into the torque integrator instead (its gain raised while
+      the lag lasts), the launches that lag the most were helped as much, but
+      what the integrator had taken up stayed and overshot.
 
 ``baseline`` (what the field uses, for comparison)
     A timed fill pulse (full input for the fill time of the design plant at the measured
@@ -174,10 +182,11 @@ LAUNCH, BASELINE = 0, 1
 (P_KISS, HOLD_OFFSET, FILL_EXIT, A_P, RATIO, ETA, MU2, MU1, MU0, F_KNEE, KP_P, KI_P, KP_T, KI_T, P_MAX, TAU_REF,
  HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, HOLD_LEAD, FILL_EXIT_COLD, FF_T0, FF_DT,
  FF_NT, FF_P0, FF_DP, FF_NP, KI_HOLD, DITHER_AMP_T, DITHER_HALF_T, FF_SHIFT_T, REQ_LEAD, KD_P, CREEP_LIMIT,
- VALVE_PLAY, TRAPPED_DIP, DITHER_HALF_HIGH, DITHER_HIGH_ABOVE, STROKE_SPAN, J_1, K_A, D_A, REF_RISE) = range(4, 52)
+ VALVE_PLAY, TRAPPED_DIP, DITHER_HALF_HIGH, DITHER_HIGH_ABOVE, STROKE_SPAN, J_1, K_A, D_A, REF_RISE,
+ KI_RISE) = range(4, 53)
 # baseline: its PI gains (V/N m, V/(N m s)) and the fill time (s) at each feedforward temperature
-KP_B, KI_B = 52, 53
-FILL_T = 54
+KP_B, KI_B = 53, 54
+FILL_T = 55
 N_FILL_T = 5
 #: the request's S-curve (:func:`ref_weights`): its length in samples, then its weights (N_REF_W slots, the unused
 #: ones zero: the longest ``ref_rise`` at the shortest sample time, 0.5 s at 0.1 ms)
@@ -210,7 +219,9 @@ CS_REF_BUF = CS_REF_N + 1
 #: how far (Pa) below the kiss point the hold keeps the plates at this oil temperature: learnt on earlier launches
 #: whose waiting vehicle was pushed too hard (:mod:`wetclutch.launch.adaptation`)
 CS_MARGIN = CS_REF_BUF + N_REF_W
-N_CS = CS_MARGIN + 1
+#: the torque loop's catch-up integrator while the shaped request rises (``ki_rise``; see :func:`_torque_setpoint`)
+CS_ZRISE = CS_MARGIN + 1
+N_CS = CS_ZRISE + 1
 #: time constant of the fast pressure filter (s)
 TAU_PF5 = 0.005
 #: the fill's steep rise has ended once the fast-filtered pressure rises slower than this (Pa/s), the stroke's ramp
@@ -622,7 +633,7 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
         th = min(max(th + share * cs[CS_DTHETA] * ctrl[TAU_THETA] * slow, THETA_MIN), THETA_MAX)
     p_r = _pressure_target(ctrl, cs[CS_KISS], r, slip, th, ratio)
     sens = _pressure_target(ctrl, cs[CS_KISS], r + 1.0, slip, th, ratio) - p_r  # Pa per N m
-    p_set = p_r + cs[CS_ZT] + ctrl[KP_T] * sens * e_t
+    p_set = p_r + cs[CS_ZT] + cs[CS_ZRISE] + ctrl[KP_T] * sens * e_t
     p_set = min(max(p_set, p_hold), ctrl[P_MAX])
     if gated:
         # finish the fill; with the request there a jolt at contact is wanted rather than
@@ -634,14 +645,20 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
         # and slam the pressure up when the plates stop the piston: lead it by no more than the fill's request does
         p_set = min(p_set, cs[CS_PF] + ctrl[REQ_LEAD])
     u_prev = cs[CS_U]
+    waiting = gated or cs[CS_ANSWERED] == 0.0
+    rising = r < (1.0 - REF_RISING) * t_ref
+    at_top = u_prev >= ctrl[U_MAX] and e_t > 0.0
     # nor does the torque integrator wind up against plates that do not touch yet, nor down while the shaped
     # request still rises: a torque ahead of it there is the plates' contact jolt or the clutch output ringing,
     # transients the request is on its way to anyway, and an integrator wound down against them holds the
     # pressure short of the request's for 100 to 150 ms afterwards (the torque's last entry into its band late)
-    wind_up = (gated or cs[CS_ANSWERED] == 0.0 or (u_prev >= ctrl[U_MAX] and e_t > 0.0)
-               or (u_prev <= ctrl[U_MIN] and e_t < 0.0) or (e_t < 0.0 and r < (1.0 - REF_RISING) * t_ref))
-    if not wind_up:
+    if not (waiting or at_top or (u_prev <= ctrl[U_MIN] and e_t < 0.0) or (e_t < 0.0 and rising)):
         cs[CS_ZT] += ctrl[KI_T] * sens * e_t * dt
+    # while the request rises the torque lags it by the valve's and the clutch output's delay; the catch-up
+    # integrator takes that lag up and gives it back as the torque comes ahead, never below zero, so that the
+    # torque integrator's guard against transients holds; it keeps what it has once the request has risen
+    if rising and not (waiting or at_top):
+        cs[CS_ZRISE] = max(cs[CS_ZRISE] + ctrl[KI_RISE] * sens * e_t * dt, 0.0)
     return p_set
 
 
@@ -1022,7 +1039,7 @@ def pack(kind: str, s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pres
              DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque", FF_SHIFT_T: "ff_shift",
              REQ_LEAD: "req_lead", KD_P: "kd_p", CREEP_LIMIT: "creep_limit", VALVE_PLAY: "valve_play",
              TRAPPED_DIP: "trapped_dip", DITHER_HALF_HIGH: "dither_half_high", DITHER_HIGH_ABOVE: "dither_high_above",
-             STROKE_SPAN: "stroke_span", J_1: "j_1", K_A: "k_a", D_A: "d_a", REF_RISE: "ref_rise"}
+             STROKE_SPAN: "stroke_span", J_1: "j_1", K_A: "k_a", D_A: "d_a", REF_RISE: "ref_rise", KI_RISE: "ki_rise"}
     baseline = {P_KISS: "p_kiss", HOLD_OFFSET: "hold_offset", DIP: "dip", DIP_N: "dip_n", KP_B: "kp", KI_B: "ki",
                 DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque"}
     for slot, name in (launch if kind == "launch" else baseline).items():

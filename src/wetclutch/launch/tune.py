@@ -52,7 +52,7 @@ from .design import Design, with_settings
 from .ranges import Range
 
 #: the gains each kind's tuning searches
-TUNABLE = {"launch": ("ki_t", "kp_p", "ki_p", "kd_p", "tau_ref", "tau_theta"), "baseline": ("kp", "ki")}
+TUNABLE = {"launch": ("ki_t", "ki_rise", "kp_p", "ki_p", "kd_p", "tau_ref", "tau_theta"), "baseline": ("kp", "ki")}
 #: each gain stays within this factor of the design's value
 SPAN = 5.0
 N_TRAIN = 40
