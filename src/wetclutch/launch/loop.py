@@ -30,7 +30,7 @@ from ..errors import SimulationError, WetclutchError
 from ..params import Params, check_oil_temp
 from ..physics import actuator
 from ..plant import clutch
-from ..rig.sensors import filter_sample, reading, sensor_table
+from ..rig.sensors import NOISE_STD, filter_sample, reading, sensor_table
 from ..sim import coldstart
 from ..sim.integrator import advance
 from ..sim.network import Trajectory, failure, outputs
@@ -342,7 +342,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
         "T_plate": tr.plate_temperature(),
     }
     t_sync = tr.sync_time("clutch")
-    resp = metrics.response(signals["time"], signals["T_r"], t_ref[:m], cond.t_request, t_sync)
+    resp = metrics.response(signals["time"], signals["T_r"], t_ref[:m], cond.t_request, t_sync, torque_noise(cond))
     if nominal is None:
         nominal = nominal_response(d, cond)
     summary = metrics.summary(resp, nominal, slip_energy=float(truth["E_clutch"][-1]), t_sync=t_sync,
@@ -375,6 +375,12 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
 _NOMINAL: dict[tuple[str, Conditions], metrics.Response] = {}
 
 
+def torque_noise(cond: Conditions) -> float:
+    """Standard deviation (N m) of the white noise on the measured axle torque ``T_r`` in a launch under ``cond``:
+    the sensor's, which the ripple does not count (:func:`wetclutch.launch.metrics.response`)."""
+    return float(sensor_table(["T_r"], 1.0 / cond.dt, noise=cond.noise, noise_scale=cond.noise_scale)[0, NOISE_STD])
+
+
 def nominal_response(d: design_.Design, cond: Conditions) -> metrics.Response:
     """The response of the design on its own plant (that plant's oil temperature, no noise seed change, same
     request): what the robustness requirement compares a launch with."""
@@ -383,7 +389,8 @@ def nominal_response(d: design_.Design, cond: Conditions) -> metrics.Response:
     if key not in _NOMINAL:
         res = simulate(d.plant, d, c, nominal=metrics.Response.empty())
         sig = res.signal_columns
-        _NOMINAL[key] = metrics.response(sig["time"], sig["T_r"], sig["t_ref"], c.t_request, res.summary["t_sync_s"])
+        _NOMINAL[key] = metrics.response(sig["time"], sig["T_r"], sig["t_ref"], c.t_request, res.summary["t_sync_s"],
+                                         torque_noise(c))
     return _NOMINAL[key]
 
 

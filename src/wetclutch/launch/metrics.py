@@ -32,13 +32,17 @@ static value ``T_ss``
     ``(max T_r between the request and the end of the steady window - T_ss) / T_ss * 100``,
     at least 0; ``T_r`` smoothed over :data:`SMOOTH` first, so that sensor noise does not count.
 ``ripple_pct``
-    RMS of the smoothed ``T_r`` about ``T_ss`` over the steady window, in % of ``T_ss``: a
-    sustained oscillation through the slip phase fails even when its mean is right.
+    RMS of ``T_r`` about ``T_ss`` over the steady window, in % of ``T_ss``, with the sensor's noise taken
+    out (its variance subtracted from the mean square: the sensor's where it is known, as in a simulated
+    launch, else estimated from the standby by :func:`noise_std`): a sustained
+    oscillation through the slip phase fails even when its mean is right, whatever its frequency (a
+    valve in a 110 Hz limit cycle as much as a clutch output ringing at 8 Hz), while the noise of a
+    small request's reading does not count.
 ``oscillation_pct``
-    RMS of the smoothed ``T_r`` about its least-squares straight line over the steady window, in %
-    of ``T_ss``: the part of the ripple that oscillates rather than drifts (a torque that sags as the
-    clutch reaches its capacity near synchronisation, or still rises, has a ripple but no oscillation).
-    Reported, not judged: the ripple is.
+    The same about the least-squares straight line of ``T_r`` over the steady window: the part of the
+    ripple that oscillates rather than drifts (a torque that sags as the clutch reaches its capacity
+    near synchronisation, or still rises, has a ripple but no oscillation). Reported, not judged: the
+    ripple is.
 ``jerk_max``
     Largest rate of change of the smoothed ``T_r`` (N m/s) between the request
     and synchronisation: the vehicle's jerk is this over its inertia.
@@ -130,6 +134,23 @@ def _smooth(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     return out
 
 
+def noise_std(t: np.ndarray, T_r: np.ndarray, t_req: float) -> float:
+    """Standard deviation of the reading's white noise, from the last :data:`CREEP_WINDOW` before the request:
+    the median of ``|dT_r|`` from sample to sample over ``0.6745 sqrt(2)`` (the differences of a white noise of
+    deviation ``s`` are normal with deviation ``s sqrt(2)``, and the median of their magnitude is 0.6745 times
+    that). The waiting clutch's torque changes slowly, so the differences are the noise's, and a jolt of the plates'
+    contact moves the median little. 0 without samples there."""
+    y = T_r[(t < t_req) & (t >= t_req - CREEP_WINDOW)]
+    if y.size < 3:
+        return 0.0
+    return float(np.median(np.abs(np.diff(y))) / (0.6745 * np.sqrt(2.0)))
+
+
+def _rms_less_noise(e: np.ndarray, noise: float) -> float:
+    """RMS of ``e`` with the noise's variance taken out of its mean square (0 where the noise is all of it)."""
+    return float(np.sqrt(max(np.mean(e ** 2) - noise ** 2, 0.0)))
+
+
 def standby(t: np.ndarray, T_r: np.ndarray, t_req: float) -> tuple[float, float]:
     """(creep, peak): the mean of ``T_r`` over the last :data:`CREEP_WINDOW` before the request, the largest
     :data:`PEAK_WINDOW` mean before it."""
@@ -165,8 +186,10 @@ def _settled(t: np.ndarray, T_r: np.ndarray, after: np.ndarray, T_ss: float, w0:
     return float(t[later[0]] - t_start) if later.size else np.inf
 
 
-def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_sync: float | None) -> Response:
-    """Figures of the response of ``T_r`` to the request ``t_ref`` made at ``t_req``."""
+def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_sync: float | None,
+             noise: float | None = None) -> Response:
+    """Figures of the response of ``T_r`` to the request ``t_ref`` made at ``t_req``; ``noise``: the standard
+    deviation of the reading's white noise where the sensor's is known, else :func:`noise_std` estimates it."""
     t_end = t[-1] if t_sync is None else t_sync
     w0, w1 = t_req + STEADY_START, min(t_req + STEADY_END, t_end - 0.1)
     waiting = standby(t, T_r, t_req)
@@ -190,9 +213,12 @@ def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_
                else np.inf)
     upto = after & (t <= w1)
     overshoot = max(0.0, (float(np.max(y[upto])) - T_ss) / T_ss * 100.0) if T_ss > 0 else np.nan
-    ripple = float(np.sqrt(np.mean((y[win] - T_ss) ** 2)) / T_ss * 100.0) if T_ss > 0 else np.nan
-    line = np.polyval(np.polyfit(t[win] - w0, y[win], 1), t[win] - w0)
-    oscillation = float(np.sqrt(np.mean((y[win] - line) ** 2)) / T_ss * 100.0) if T_ss > 0 else np.nan
+    # on the reading itself, not the smoothed one: a smoothing that hides the noise hides an oscillation
+    # as fast (a 10 ms mean passes a tenth of 110 Hz); the noise's variance is taken out instead
+    noise = noise_std(t, T_r, t_req) if noise is None else noise
+    ripple = _rms_less_noise(T_r[win] - T_ss, noise) / T_ss * 100.0 if T_ss > 0 else np.nan
+    line = np.polyval(np.polyfit(t[win] - w0, T_r[win], 1), t[win] - w0)
+    oscillation = _rms_less_noise(T_r[win] - line, noise) / T_ss * 100.0 if T_ss > 0 else np.nan
     slip = after & (t < t_end)
     rate = np.abs(np.diff(y)) / np.diff(t)
     jerk = float(np.max(rate[slip[1:]])) if np.any(slip[1:]) else np.nan
