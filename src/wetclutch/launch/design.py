@@ -75,10 +75,9 @@ LAUNCH_DEFAULTS = {
 #: 0.165 to 0.195 s (the S-curve on every launch) over the default rig with a clutch output 3.67 times its own (300
 #: plants, first launches), ``ki_rise`` from 0, 1.5 and 3 times ``ki_t`` over the default rig (1,000 plants of the
 #: shipped ranges, two seeds, three launches) and 1.5 and 3 times over 16 clutches unlike it (300 plants each);
-#: ``kd_p`` halved once the ripple was judged on the torque's reading rather than its 10 ms mean (at the swept
-#: value the pressure loop rang at 60-70 Hz in hot oil, which that mean had hidden: 1,000 plants of the shipped
-#: ranges, three launches, 0.5 and 1 times the swept value on three seeds, 0 and 0.25 times on one); the rest were
-#: set by hand on the default rig
+#: ``kd_p`` half of what a sweep judging the torque's 10 ms mean had chosen, a mean that hid the pressure loop
+#: ringing at 60-70 Hz in hot oil (1,000 plants of the shipped ranges, three launches, 0.5 and 1 times the swept
+#: value on three seeds, 0 and 0.25 times on one); the rest were set by hand on the default rig
 TUNED = ("kp_p", "ki_p", "ki_t")
 #: oil temperature (C) at which :func:`rate_gain_share` compares the oil's compliances (the share hardly depends on it)
 RATE_GAIN_TEMP_C = 60.0
