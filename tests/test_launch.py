@@ -72,6 +72,20 @@ def test_without_noise_the_loop_measures_the_truth():
     np.testing.assert_allclose(res.signals.p_clutch, res.truth.p_clutch, atol=1e-6)
 
 
+@pytest.mark.parametrize("scale", [1.0, 2.0])
+def test_the_noise_the_ripple_discounts_is_the_one_the_loop_reads(scale):
+    # the waiting clutch's reading less the truth is the sensor's white noise and, small beside it, what the
+    # sensor's filter takes off the hold's dither (some 0.13 N m RMS): the noise's deviation is what the metrics take
+    # out of the ripple
+    c = launch.Conditions(t_ref=60.0, t_max=1.6, noise_scale=scale)
+    res = launch.simulate(Params(), "launch", c, nominal=metrics.Response.empty())
+    wait = (res.signals.time > 0.6) & (res.signals.time < 1.0)
+    err = (res.signals.T_r - res.truth.T_r)[wait]
+    assert launch.torque_noise(c) == pytest.approx(0.5 * scale)
+    assert err.std() == pytest.approx(launch.torque_noise(c), rel=0.1)
+    assert launch.torque_noise(launch.Conditions(noise=False)) == 0.0
+
+
 def test_slip_energy_is_the_integral_of_clutch_power(nominal):
     tr = nominal.truth
     power = tr.T_c * tr.slip
