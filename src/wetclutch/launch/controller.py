@@ -129,8 +129,9 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       believed kiss point corrects it for the next launch. The torque onset that
       finds the kiss point is a rise above the open plates' drag, on which the
       filtered axle torque settles only some 60 ms after the start of the recording.
-    * **Anti-windup.** Both integrators stop when the input saturates in the
-      direction that would wind them further (conditional integration), and
+    * **Anti-windup.** The pressure and torque integrators stop when the input
+      saturates in the direction that would wind them further (conditional
+      integration; the catch-up integrator below stops at the top too), and
       the pressure target is limited to the supply pressure. The torque
       integrator does not wind down while the shaped request still rises
       (:data:`REF_RISING`): a torque ahead of it then is a transient (the jolt
