@@ -360,14 +360,20 @@ SOON = 1e-10
 MAX_SOON = 10_000
 
 
+#: the most a grazing clutch's grip margin grows to (relative to its static capacity)
+GRIP_MAX = 1e-6
+
+
 @jit_inline
 def _grazing(e_ev, soon, ws, net):
     """An event at once after a restart (the ``soon``-th in a row, :data:`SOON`): a clutch that slid off from
     zero slip and at once turned back, twice: its torque only grazed its capacity. The restart locks it; its
-    grip margin keeps it locked until a real breakaway."""
+    grip margin keeps it locked until a real breakaway. A margin that does not hold it (the torque beyond the
+    capacity by more than :data:`GRIP` as it turns back: a valve stem's drive at its peak) doubles with each
+    further grazing in a row, up to :data:`GRIP_MAX`."""
     j = _slide_end(e_ev, ws, net) if soon >= 2 else -1
     if j >= 0:
-        ws.fstate[fs_grip(net.cl_a.shape[0], net.gr_in.shape[0]) + j] = GRIP
+        ws.fstate[fs_grip(net.cl_a.shape[0], net.gr_in.shape[0]) + j] = min(GRIP * 2.0 ** (soon - 2), GRIP_MAX)
 
 
 #: a slide whose slip, from zero at its step's start, cannot have left this share of its speed's absolute tolerance
