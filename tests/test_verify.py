@@ -89,6 +89,23 @@ def test_small_run_is_deterministic_and_replayable(small_run, tmp_path):
         assert summary[key] == pytest.approx(r["metrics"][key], rel=1e-9)
 
 
+def test_the_replay_of_a_verification_on_a_changed_plant_carries_the_change(small_run, tmp_path):
+    # a plant changed on the command line (the magnet's play, which no range varies) is the plant the replay runs
+    # on: its launch equals the sample's, not the built-in rig's
+    _, root = small_run
+    out = tmp_path / "out"
+    assert cli.main(["verify", "--out", str(out), "--samples", "1", "--seed", "5", "--workers", "1", "--quiet",
+                     "--ranges", str(root / "r.toml"), "--set", "valve.I_hyst=0.07"]) == 0
+    r = json.loads((out / "verify.json").read_text())["results"][-1]
+    argv = shlex.split(r["replay"])[1:]
+    assert "valve.I_hyst=0.07" in argv
+    argv[argv.index("--out") + 1] = str(tmp_path / "replay")
+    assert cli.main(argv) == 0
+    summary = json.loads((tmp_path / "replay" / "summary.json").read_text())
+    for key in ("t95_settled_s", "steady_state_error_pct", "overshoot_pct", "creep_Nm"):
+        assert summary[key] == pytest.approx(r["metrics"][key], rel=1e-9)
+
+
 def test_bins_partition_the_random_samples(small_run):
     res, _ = small_run
     assert set(res["bins"]) == set(SMALL)

@@ -7,6 +7,7 @@ code 2; output directories are written whole or not at all.
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -150,10 +151,12 @@ def _design(args: argparse.Namespace, plant: params_mod.Params, origin: dict[str
 
 
 def _replay_args(args: argparse.Namespace, controller_file: str) -> str:
-    """Options that make ``wetclutch launch`` replay a sample: the plant's file and the controller file written
-    beside the results (the design, not one made anew on the sample's plant)."""
-    out = f" --param-file {args.param_file}" if args.param_file else ""
-    return out + f" --controller-file {Path(args.out) / controller_file}"
+    """Options that make ``wetclutch launch`` replay a sample: the plant's file and changes (the ranges' own
+    ``--set`` options follow them and win), and the controller file written beside the results (the design, not
+    one made anew on the sample's plant)."""
+    out = f" --param-file {shlex.quote(str(args.param_file))}" if args.param_file else ""
+    out += "".join(f" --set {shlex.quote(s)}" for s in args.sets)
+    return out + f" --controller-file {shlex.quote(str(Path(args.out) / controller_file))}"
 
 
 def _cmd_design(args: argparse.Namespace) -> None:
