@@ -26,10 +26,9 @@ from .dopri import C, component, dense, error_norm, stage, weights
 from .modes import forget, input_modes, settle, stale
 from .rhs import copy, events, rhs, rhs_call, static_limit
 from .workspace import (ERR_SINGULAR, ERR_ZENO, FS_AMP, FS_H, FS_LOCKS, FS_LOG_ERR, FS_PISTON, FS_PLAY_CUR,
-                        FS_PLAY_DIR, FS_PLAY_G, FS_PLAY_TAU, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T, GRIP, IS_EVENTS,
-                        IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE, IS_STEPS, IS_SWITCHES, IS_TURNS,
-                        LOCK_FIRST, LOCK_LAST, LOCKED, OK, SETTLE_ALL, SETTLE_INPUT, UNDECIDED,
-                        fs_grip)
+                        FS_PLAY_DIR, FS_PLAY_G, FS_PLAY_TAU, FS_PWM_H, FS_PWM_NEXT, FS_PWM_START, FS_T, GRIP, GRIP_MAX,
+                        IS_EVENTS, IS_LAST_EVENT, IS_N_LOG, IS_N_OUT, IS_REJECTED, IS_SETTLE, IS_STEPS, IS_SWITCHES,
+                        IS_TURNS, LOCK_FIRST, LOCK_LAST, LOCKED, OK, SETTLE_ALL, SETTLE_INPUT, UNDECIDED, fs_grip)
 
 
 @jit_inline
@@ -358,10 +357,6 @@ def _emit_grid(t, t_seg, h, y_old, ws, net, ext, dt_out, t_out0, out_t, out_x, o
 #: MAX_SOON such events in a row creep on by picoseconds and end the run as Zeno behaviour
 SOON = 1e-10
 MAX_SOON = 10_000
-
-
-#: the most a grazing clutch's grip margin grows to (relative to its static capacity)
-GRIP_MAX = 1e-6
 
 
 @jit_inline

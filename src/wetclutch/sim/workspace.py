@@ -94,7 +94,7 @@ def fs_ratio(nc):
 def fs_grip(nc, ng):
     """Start of the clutches' slots in ``fstate``, one each, after the gears': the relative margin by which a
     locked clutch's torque must exceed its static capacity to let go (0; :data:`GRIP` after a grazing
-    breakaway, until the clutch lets go)."""
+    breakaway, doubled with each further one in a row up to :data:`GRIP_MAX`, until the clutch lets go)."""
     return FS_LOCKS + 2 * nc + 3 * ng
 
 
@@ -103,6 +103,8 @@ def fs_grip(nc, ng):
 #: margin sit below rounding there; holding the lock until the torque exceeds the capacity by this much makes
 #: the breakaway a real one
 GRIP = 1e-9
+#: the most a grazing clutch's grip margin grows to, when its torque turns back beyond the capacity by more than GRIP
+GRIP_MAX = 1e-6
 
 
 def moving_gears(net) -> int:
