@@ -80,12 +80,17 @@ def test_small_run_is_deterministic_and_replayable(small_run, tmp_path):
     assert [r["metrics"] for r in res["results"]] == [r["metrics"] for r in again["results"]]
     assert res["cases"] == 3 + 2
     # the replay command reproduces the sample's launch
-    r = res["results"][-1]
+    _assert_replays(res["results"][-1], tmp_path, ("t95_s", "t95_settled_s", "steady_state_error_pct",
+                                                    "overshoot_pct", "creep_Nm"))
+
+
+def _assert_replays(r, tmp_path, keys):
+    """Run sample ``r``'s replay command into ``tmp_path``: its launch has the sample's figures ``keys``."""
     argv = shlex.split(r["replay"])[1:]
     argv[argv.index("--out") + 1] = str(tmp_path / "replay")
     assert cli.main(argv) == 0
     summary = json.loads((tmp_path / "replay" / "summary.json").read_text())
-    for key in ("t95_s", "t95_settled_s", "steady_state_error_pct", "overshoot_pct", "creep_Nm"):
+    for key in keys:
         assert summary[key] == pytest.approx(r["metrics"][key], rel=1e-9)
 
 
@@ -97,13 +102,8 @@ def test_the_replay_of_a_verification_on_a_changed_plant_carries_the_change(smal
     assert cli.main(["verify", "--out", str(out), "--samples", "1", "--seed", "5", "--workers", "1", "--quiet",
                      "--ranges", str(root / "r.toml"), "--set", "valve.I_hyst=0.07"]) == 0
     r = json.loads((out / "verify.json").read_text())["results"][-1]
-    argv = shlex.split(r["replay"])[1:]
-    assert "valve.I_hyst=0.07" in argv
-    argv[argv.index("--out") + 1] = str(tmp_path / "replay")
-    assert cli.main(argv) == 0
-    summary = json.loads((tmp_path / "replay" / "summary.json").read_text())
-    for key in ("t95_settled_s", "steady_state_error_pct", "overshoot_pct", "creep_Nm"):
-        assert summary[key] == pytest.approx(r["metrics"][key], rel=1e-9)
+    assert "valve.I_hyst=0.07" in shlex.split(r["replay"])
+    _assert_replays(r, tmp_path, ("t95_settled_s", "steady_state_error_pct", "overshoot_pct", "creep_Nm"))
 
 
 def test_bins_partition_the_random_samples(small_run):
