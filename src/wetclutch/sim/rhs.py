@@ -23,7 +23,9 @@ in one small linear (KKT) system ``[M B; G 0] [a; lam] = [f; v]`` (``v``: the ve
 of moving ratios, else 0). Its matrix depends on the modes and the ratios only, so it is
 factored when they change and the columns of its inverse that multiply the body torques
 (and the velocity terms) are kept: every other evaluation is a small matrix-vector
-product.
+product. The columns of the last few mode combinations are kept too (:func:`factors`): a
+clutch that sticks and slips by turns, such as the valve stem under a dithered input, comes
+back to modes whose system was solved before.
 """
 
 from __future__ import annotations
@@ -33,9 +35,9 @@ from ..physics import thermal as th_
 from . import signals
 from .compiled import jit, jit_inline
 from .linalg import lu_factor, lu_solve, svd_jacobi
-from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FREE, FS_AMP, FS_AMP_G, FS_PISTON, FS_PLAY_CUR,
-                        FS_PLAY_DIR, FS_PLAY_G, FS_PLAY_TAU, IS_BAD_BODY, IS_REDUNDANT, LOCKED, STUCK, aux_offsets,
-                        fs_grip, fs_ratio)
+from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FACTOR_CACHE, FREE, FS_AMP, FS_AMP_G, FS_PISTON,
+                        FS_PLAY_CUR, FS_PLAY_DIR, FS_PLAY_G, FS_PLAY_TAU, IS_BAD_BODY, IS_CACHE_NEXT, IS_REDUNDANT,
+                        LOCKED, STUCK, aux_offsets, fs_grip, fs_ratio)
 
 # columns of NetArrays.gr_lim: a moving ratio's limits and its rate limit (1/s)
 LIM_MIN, LIM_MAX, LIM_RATE = 0, 1, 2
@@ -407,6 +409,59 @@ def _constraint_torques(x, net, clm, grm, z, aux):
     return p_gear
 
 
+@jit
+def factors(net, x, clm, grm, ws, n):
+    """The constraint solution ``ws.G`` of the current modes and ratios (:func:`_factor_constraints`), taken from
+    the cache in ``ws.A``'s last rows where these modes and ratios had it made before. A cached solution is the one
+    the factorisation gives (the same operations on the same matrix), so the motion does not depend on the cache.
+    Redundant locks' least-norm solutions are not cached."""
+    nc = net.cl_a.shape[0]
+    ng = net.gr_in.shape[0]
+    A, G = ws.A, ws.G
+    nmat = A.shape[1]
+    base = A.shape[0] - FACTOR_CACHE * (nmat + 1)
+    o = fs_ratio(nc)
+    for k in range(FACTOR_CACHE):
+        key = base + k * (nmat + 1)
+        if A[key, 0] != 1.0 or A[key, 1] != n:
+            continue
+        same = True
+        for j in range(nc):
+            if A[key, 2 + j] != clm[j]:
+                same = False
+                break
+        if same:
+            for g in range(ng):
+                if A[key, 2 + nc + g] != grm[g] or A[key, 2 + nc + ng + g] != ratio(x, net, g):
+                    same = False
+                    break
+        if not same:
+            continue
+        for g in range(ng):
+            ws.fstate[o + g] = A[key, 2 + nc + ng + g]
+        for r in range(n):
+            for c in range(G.shape[1]):
+                G[r, c] = A[key + 1 + r, c]
+        ws.istate[IS_REDUNDANT] = 0
+        return True
+    if not _factor_constraints(net, x, clm, grm, A, ws.piv, ws.sol, G, n, ws.istate, ws.fstate):
+        return False
+    if ws.istate[IS_REDUNDANT] == 0 and 2 + nc + 2 * ng <= nmat and G.shape[1] <= nmat:
+        k = ws.istate[IS_CACHE_NEXT]
+        ws.istate[IS_CACHE_NEXT] = (k + 1) % FACTOR_CACHE
+        key = base + k * (nmat + 1)
+        A[key, 0], A[key, 1] = 1.0, n
+        for j in range(nc):
+            A[key, 2 + j] = clm[j]
+        for g in range(ng):
+            A[key, 2 + nc + g] = grm[g]
+            A[key, 2 + nc + ng + g] = ws.fstate[o + g]
+        for r in range(n):
+            for c in range(G.shape[1]):
+                A[key + 1 + r, c] = G[r, c]
+    return True
+
+
 @jit_inline
 def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
     """Derivatives ``dx`` and element torques ``aux`` (layout: :func:`~wetclutch.sim.workspace.aux_offsets`)
@@ -446,7 +501,7 @@ def rhs(t, left, x, net, ext, ws, dx, aux, refactor, full=True):
             n += 1
     moving = _ratio_rates(t, left, net, ext, dx, ws.fstate)
     if refactor or (moving and _ratios_moved(x, net, ws.fstate)):
-        if not _factor_constraints(net, x, clm, grm, ws.A, ws.piv, ws.sol, ws.G, n, ws.istate, ws.fstate):
+        if not factors(net, x, clm, grm, ws, n):
             return False
     nv = 0
     if moving:

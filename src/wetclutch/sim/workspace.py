@@ -69,7 +69,12 @@ IS_LAST_EVENT = 7  # event function of the last event
 IS_BAD_BODY = 8  # a body whose motion the network does not determine (-1: none)
 IS_REDUNDANT = 9  # 1: the current constraint factors are the least-norm ones of redundant locks
 IS_TURNS = 10  # located events that were the coil current turning (the engine's, for the magnet's play; in IS_EVENTS)
-N_ISTATE = 11
+IS_CACHE_NEXT = 11  # the slot of the constraint solutions' cache (FACTOR_CACHE) that the next miss fills
+N_ISTATE = 12
+#: constraint solutions kept for this many mode and ratio combinations (rows of ``Workspace.A`` after its own): a
+#: valve stem that sticks and slips with each edge of the input's dither switches between two, whose factors
+#: would otherwise be remade at every switch
+FACTOR_CACHE = 4
 
 EVENT_LOG = 4096  # rows of the mode-change log (time, clutch, new mode); later changes are counted, not logged
 
@@ -142,8 +147,9 @@ class Workspace(NamedTuple):
     aux_new: np.ndarray
     g_old: np.ndarray
     g_new: np.ndarray
-    A: np.ndarray  # (3 nmat + 1, nmat) LU factors of the constraint matrix for the current modes; the rows
-    # below are the SVD's scratch (U S, V, singular values) when the matrix is singular (redundant locks)
+    A: np.ndarray  # (3 nmat + 1 + FACTOR_CACHE (nmat + 1), nmat) LU factors of the constraint matrix for the current
+    # modes; the rows below are the SVD's scratch (U S, V, singular values) when the matrix is singular (redundant
+    # locks), then the cache of solutions (:func:`wetclutch.sim.rhs.factors`)
     z: np.ndarray
     piv: np.ndarray
     sol: np.ndarray  # (nmat,) scratch: one column of the inverse constraint matrix
@@ -191,7 +197,7 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
         aux_new=np.zeros(max(naux, 1)),
         g_old=np.zeros(max(n_events(net), 1)),
         g_new=np.zeros(max(n_events(net), 1)),
-        A=np.zeros((3 * max(nmat, 1) + 1, max(nmat, 1))),
+        A=np.zeros((3 * max(nmat, 1) + 1 + FACTOR_CACHE * (max(nmat, 1) + 1), max(nmat, 1))),
         z=np.zeros(max(nmat, 1)),
         piv=np.zeros(max(nmat, 1), dtype=np.int64),
         sol=np.zeros(max(nmat, 1)),
