@@ -225,7 +225,9 @@ def _cmd_verify(args: argparse.Namespace) -> None:
     verify_report.write(res, args.out, d)
     seq = (f"; after {args.sequence} launches of each clutch (first launch {100 * res['pass_rate_first_launch']:.1f} %,"
            f" {res['slams']} slams)" if args.sequence > 1 else "")
-    print(f"verify {d.kind}: all requirements in {verify_report.headline(res, _rates(res))}{seq} -> {args.out}")
+    reach = res["pass_rate_reachable"]
+    reach = f"; {100 * reach:.1f} % of those some controller can pass" if reach == reach else ""
+    print(f"verify {d.kind}: all requirements in {verify_report.headline(res, _rates(res))}{reach}{seq} -> {args.out}")
 
 
 def _cmd_report(args: argparse.Namespace) -> None:

@@ -25,10 +25,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from numba import njit
+from scipy.optimize import brentq
 
 from ..errors import SimulationError, WetclutchError
 from ..params import Params, check_oil_temp
 from ..physics import actuator
+from ..physics.friction import knee, normal_force
 from ..plant import clutch
 from ..rig.sensors import NOISE_STD, filter_sample, reading, sensor_table
 from ..sim import coldstart
@@ -416,6 +418,58 @@ def open_plates_creep(params: Params, conditions: Conditions) -> float:
     whatever the controller."""
     tr = _open_loop(params, conditions, design_.INPUT_RANGE["dc"][0])
     return metrics.standby(tr.t, tr.spring_torque("axle"), conditions.t_request)[0]
+
+
+def _pressed(p: np.ndarray, params: Params) -> np.ndarray:
+    """``F_n knee(F_n)`` at clutch pressures ``p``: what the plates' torque is proportional to at a given slip and
+    pack temperature (:mod:`wetclutch.physics.friction`)."""
+    f_n = normal_force.py_func(np.asarray(p, dtype=float), actuator.contact_pressure(params), params.hydraulics.A_p)
+    return f_n * knee.py_func(f_n, params.friction.F_knee)
+
+
+def capacity_allows(params: Params, result: LaunchResult, levels: int = 64) -> bool:
+    """Whether some launch on this clutch could meet the two requirements its capacity decides, the steady-state
+    error and the ripple over the judged window, along ``result``'s slip.
+
+    The plates' capacity ``T_cap(t)`` is that at the valve's highest static pressure ``p_max`` (input at the top of
+    its range, at the launch's oil temperature): at the launch's slip and pack temperature the plates' torque is
+    proportional to ``F_n knee(F_n)``, so it is the launch's clutch torque ``T_c`` times ``F_n knee(F_n)`` at
+    ``p_max`` over the same at the launch's pressure, and at the axle ``eta / i`` of it (the clutch output's
+    acceleration left out: in a launch at its capacity the axle torque and ``eta / i T_c`` differ by 0.01 % over the
+    judged window). Of the torques under ``T_cap`` with a given mean over the window, the flat-topped
+    ``min(T_cap, c)`` varies least; the clutch allows the launch if one of them, its level ``c`` taken from the
+    lowest whose mean is within the steady-state error of the request to the highest, has its ripple within the
+    limit. A launch that gave the clutch more torque would have slipped less: where the friction falls as the slip
+    falls, which is where a capacity sags, its friction would have been lower, so the test is, if anything,
+    generous there. Where the plates do not slide under pressure (open, or locked) nothing bounds the torque."""
+    w0, w1 = result.summary["steady_window_s"]
+    sig, tr = result.signal_columns, result.truth_columns
+    win = (sig["time"] >= w0) & (sig["time"] <= w1)
+    ref = float(np.mean(sig["t_ref"][win])) if np.any(win) else 0.0
+    if w1 - w0 < metrics.MIN_WINDOW or not ref > 0.0:
+        return True  # no steady state to judge
+    p_max = clutch.static_pressure(params, design_.INPUT_RANGE["dc"][1], temp_C=result.summary["oil_temp_C"])
+    pressed = _pressed(tr["p_clutch"], params)
+    sliding = (pressed > 0.0) & (tr["locked"] == 0)
+    scale = np.divide(_pressed(np.array([p_max]), params)[0], pressed, out=np.zeros_like(pressed), where=sliding)
+    d = params.driveline
+    cap = np.where(sliding, d.eta / d.ratio * tr["T_c"] * scale, np.inf)
+    cap = np.interp(sig["time"][win], tr["time"], cap)
+    err = metrics.REQ_ESS_PCT / 100.0
+    top = max(float(np.max(cap[np.isfinite(cap)], initial=0.0)), (1.0 + err) * ref)
+
+    def mean_at(c: float) -> float:
+        return float(np.mean(np.minimum(cap, c)))
+
+    if mean_at(top) < (1.0 - err) * ref:
+        return False  # the mean falls short of the request whatever the shape
+    lo = brentq(lambda c: mean_at(c) - (1.0 - err) * ref, 0.0, top)
+    hi = brentq(lambda c: mean_at(c) - (1.0 + err) * ref, lo, top) if mean_at(top) > (1.0 + err) * ref else top
+    for c in np.linspace(lo, hi, levels):
+        y = np.minimum(cap, c)
+        if np.sqrt(np.mean((y - y.mean()) ** 2)) / y.mean() * 100.0 <= metrics.REQ_RIPPLE_PCT:
+            return True
+    return False
 
 
 def sequence(params: Params, controller: design_.Design | str, conditions: Conditions, n: int,

@@ -94,10 +94,15 @@ def verify_table(result: dict[str, Any]) -> str:
                   f"{result['failures_at_capacity']} had the valve input at the top of its range and the torque "
                   f"short of the request in at least {verify.CAPACITY_SHARE:g} % of the judged window: the "
                   "controller asked for all the valve gives, the clutch at or beyond its capacity there (supply "
-                  "pressure, friction, CVT ratio, request); "
+                  f"pressure, friction, CVT ratio, request), and for {result['failures_beyond_capacity']} of "
+                  "them no torque that the plates carry at the valve's highest static pressure, along the launch's "
+                  "slip, meets both the steady-state error and the ripple over the judged window: no controller "
+                  "passes those; "
                   f"{result['failures_creep_of_the_drag']} crept beyond {metrics.REQ_CREEP_NM:g} N m where the open "
                   "plates' oil drag alone, with the valve input at the bottom of its range from the start, pushes "
-                  "the waiting vehicle as hard: no controller holds those within the limit.", ""]
+                  "the waiting vehicle as hard: no controller holds those within the limit. Without the random "
+                  "clutches that fail whatever the controller (those beyond the capacity or creeping by the drag), "
+                  f"{_pct(result['pass_rate_reachable'])} pass.", ""]
     lines += [f"Of the {result['samples']} random clutches, {result['rippling']} have a ripple above "
               f"{metrics.REQ_RIPPLE_PCT:g} % of their torque over the judged window, {result['oscillating']} of them "
               "an oscillation (the ripple about the torque's straight line: what oscillates rather than drifts) "
@@ -165,7 +170,8 @@ def write(result: dict[str, Any], out: str | Path, design: Design) -> None:
         (d / "verify.md").write_text(md)
         rows = [{"index": r["index"], "corner": r["corner"], **r["values"], **r["metrics"], **r["requirements"],
                  "all_pass": r["all_pass"], "fill_too_slow": r["fill_too_slow"],
-                 "creep_of_the_drag": r["creep_of_the_drag"]} for r in result["results"]]
+                 "creep_of_the_drag": r["creep_of_the_drag"], "beyond_capacity": r["beyond_capacity"]}
+                for r in result["results"]]
         pd.DataFrame(rows).to_csv(d / "samples.csv", index=False)
         plot_histograms(result, d / "histograms.png")
         html.write_verify(d / "verify.html", md, result, _METRICS)
