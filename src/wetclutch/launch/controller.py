@@ -145,6 +145,24 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       value. Folded into the torque integrator instead (its gain raised while
       the lag lasts), the launches that lag the most were helped as much, but
       what the integrator had taken up stayed and overshot.
+    * **A flat torque where the capacity sags.** Where the friction falls as the
+      slip falls (a low friction level, a steep curve) and the request is large,
+      the clutch's capacity at the valve's top pressure falls through the slip
+      phase. A controller that keeps asking for the request follows the sag, and
+      over the judged window the torque drifts down by more than the ripple
+      allows, where a torque held flat a little lower would have passed (the
+      verification tells such launches from those that no torque under the
+      capacity passes). Once the input has stayed at the top of its range (within
+      the torque dither of it) for :data:`TOP_N` samples, the pressure there is
+      the valve's top; from then on the capacity at the end of the judged window
+      is predicted (the friction law at the slip then, from the slip's rate, and
+      the friction factor less its falling trend) and, where it is short of the
+      request, the request is lowered to it, to no less than :data:`FLAT_FLOOR`
+      of it: within the steady-state error allowed. Over nine seeds of the
+      shipped ranges on the built-in rig (1,000 clutches each, three launches)
+      this passed 9 more launches of the 9,000 and failed none that passed
+      before; on the identified plants of 16 other clutches (300 first launches
+      each) it passed 34 more and failed 5 that passed before.
 
 ``baseline`` (what the field uses, for comparison)
     A timed fill pulse (full input for the fill time of the design plant at the measured
@@ -164,6 +182,7 @@ import numpy as np
 from numba import njit
 
 from ..physics import friction
+from .metrics import STEADY_END
 
 _jit = njit(cache=True, error_model="numpy", _nrt=False)
 _inline = njit(cache=True, error_model="numpy", _nrt=False, inline="always")
@@ -222,7 +241,29 @@ CS_REF_BUF = CS_REF_N + 1
 CS_MARGIN = CS_REF_BUF + N_REF_W
 #: the torque loop's catch-up integrator while the shaped request rises (``ki_rise``; see :func:`_torque_setpoint`)
 CS_ZRISE = CS_MARGIN + 1
-N_CS = CS_ZRISE + 1
+#: for a flat torque at the clutch's capacity (:func:`_within_capacity`): the sample of the request, the valve's
+#: top pressure (Pa), the slip's low-passed rate (rad/s^2) and the last sample's slip, the samples in a row with the
+#: input at its top, and whether it has been there (1) in this launch
+CS_NREQ = CS_ZRISE + 1
+CS_PTOP = CS_NREQ + 1
+CS_DSLIP = CS_PTOP + 1
+CS_SLIPP = CS_DSLIP + 1
+CS_ATTOP = CS_SLIPP + 1
+CS_SAT = CS_ATTOP + 1
+N_CS = CS_SAT + 1
+#: the input counts as at the top of its range once within the torque dither of it for this many samples in a row
+TOP_N = 20
+#: the capacity is predicted from this long (s) after the request, when the slip's rate is measured, to the end of
+#: the window the requirements judge (:data:`wetclutch.launch.metrics.STEADY_END` after the request, or
+#: FLAT_BEFORE_SYNC (s) before lock-up)
+FLAT_FROM = 0.1
+FLAT_BEFORE_SYNC = 0.1
+#: the lowest share of the request a flat torque aims at: 8 % below it, within the steady-state error's 10 %
+FLAT_FLOOR = 0.92
+#: time constant (s) of the slip rate's low-pass
+TAU_SLIP = 0.05
+#: share of the valve's top pressure the predicted capacity is taken at (the pressure ripples about its mean there)
+TOP_SHARE = 0.98
 #: time constant of the fast pressure filter (s)
 TAU_PF5 = 0.005
 #: the fill's steep rise has ended once the fast-filtered pressure rises slower than this (Pa/s), the stroke's ramp
@@ -586,6 +627,53 @@ def _shaped(ctrl, cs, x):
 
 
 @_inline
+def _top_pressure(ctrl, temp):
+    """The lowest pressure (Pa) at which the feedforward map at ``temp`` asks for the top of the input range: the
+    valve's top pressure as the design knows it."""
+    lo, hi = 0.0, ctrl[P_MAX]
+    if _table(ctrl, temp, hi) < ctrl[U_MAX]:
+        return hi
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        if _table(ctrl, temp, mid) < ctrl[U_MAX]:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@_inline
+def _within_capacity(ctrl, cs, meas, r, t_ref, slip, th, ratio, dt):
+    """The request ``r`` (N m), lowered where the clutch's capacity at the valve's top pressure would sag below the
+    request ``t_ref`` before the judged window ends: to that capacity, but no lower than :data:`FLAT_FLOOR` of the
+    request. Only once the input has been at the top of its range (within the torque dither of it, :data:`TOP_N`
+    samples in a row): the pressure there is the valve's top, lower than the map's where the supply is. The capacity
+    is the friction law at the slip the window ends with (from its low-passed rate), scaled by the friction factor
+    ``th`` less its falling trend over that time."""
+    if cs[CS_N] > cs[CS_NREQ]:
+        cs[CS_DSLIP] += ((slip - cs[CS_SLIPP]) / dt - cs[CS_DSLIP]) * dt / (TAU_SLIP + dt)
+    cs[CS_SLIPP] = slip
+    cs[CS_ATTOP] = cs[CS_ATTOP] + 1.0 if cs[CS_U] >= ctrl[U_MAX] - ctrl[DITHER_AMP_T] else 0.0
+    if cs[CS_ATTOP] >= TOP_N:
+        cs[CS_PTOP] = min(cs[CS_PTOP], max(cs[CS_PF], cs[CS_KISS]))
+        cs[CS_SAT] = 1.0
+    since = (cs[CS_N] - cs[CS_NREQ]) * dt
+    fall = -cs[CS_DSLIP]
+    if cs[CS_SAT] == 0.0 or since < FLAT_FROM or fall <= 0.0 or t_ref <= 0.0:
+        return r
+    rest = min(STEADY_END - since, slip / fall - FLAT_BEFORE_SYNC)
+    if rest <= 0.0:
+        return r
+    slip_end = max(slip - fall * rest, 0.0)
+    th_end = max(th + min(cs[CS_DTHETA], 0.0) * rest, THETA_MIN) if cs[CS_THETA_N] >= THETA_TREND_N else th
+    f_n = friction.normal_force(TOP_SHARE * cs[CS_PTOP], cs[CS_KISS], ctrl[A_P])
+    cap = ctrl[ETA] / ratio * _mu(ctrl, slip_end) * th_end * f_n * friction.knee(f_n, ctrl[F_KNEE])
+    if cap >= t_ref:
+        return r
+    return min(r, max(cap, FLAT_FLOOR * t_ref))
+
+
+@_inline
 def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     """The pressure set point once torque is requested, and whether the request still waits for the fill."""
     p = meas[M_P]
@@ -604,7 +692,6 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
             cs[CS_REF1] += (t_ref - cs[CS_REF1]) * dt / (ctrl[TAU_REF] + dt)
             cs[CS_REF] += (cs[CS_REF1] - cs[CS_REF]) * dt / (ctrl[TAU_REF] + dt)
     r = cs[CS_REF]
-    e_t = r - meas[M_TR]
     if cs[CS_ANSWERED] == 0.0:
         # the plates answer: the axle torque rises, or the clutch output turns (a heavy one takes the clutch's
         # first torque to spin up before the axle feels it)
@@ -632,6 +719,8 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     if cs[CS_THETA_N] >= THETA_TREND_N:
         share = THETA_TREND_SHARE * (W1_DROP_MAX - slow) / (W1_DROP_MAX - 1.0)
         th = min(max(th + share * cs[CS_DTHETA] * ctrl[TAU_THETA] * slow, THETA_MIN), THETA_MAX)
+    r = _within_capacity(ctrl, cs, meas, r, t_ref, slip, th, ratio, dt)
+    e_t = r - meas[M_TR]
     p_r = _pressure_target(ctrl, cs[CS_KISS], r, slip, th, ratio)
     sens = _pressure_target(ctrl, cs[CS_KISS], r + 1.0, slip, th, ratio) - p_r  # Pa per N m
     p_set = p_r + cs[CS_ZT] + cs[CS_ZRISE] + ctrl[KP_T] * sens * e_t
@@ -871,6 +960,8 @@ def _launch(ctrl, cs, meas, t_ref):
         return u
     if phase == HOLD and t_ref > 0.0:
         phase = TORQUE
+        cs[CS_NREQ] = cs[CS_N]
+        cs[CS_PTOP] = _top_pressure(ctrl, temp)
         cs[CS_REF] = 0.0
         cs[CS_REF1] = 0.0
         cs[CS_REF_N] = 0.0
