@@ -643,11 +643,11 @@ def _top_pressure(ctrl, temp):
 
 
 @_inline
-def _within_capacity(ctrl, cs, meas, r, t_ref, slip, th, ratio, dt):
+def _within_capacity(ctrl, cs, r, t_ref, slip, th, ratio, dt):
     """The request ``r`` (N m), lowered where the clutch's capacity at the valve's top pressure would sag below the
     request ``t_ref`` before the judged window ends: to that capacity, but no lower than :data:`FLAT_FLOOR` of the
     request. Only once the input has been at the top of its range (within the torque dither of it, :data:`TOP_N`
-    samples in a row): the pressure there is the valve's top, lower than the map's where the supply is. The capacity
+    samples in a row): the pressure there is the valve's top, below the map's where the supply is lower. The capacity
     is the friction law at the slip the window ends with (from its low-passed rate), scaled by the friction factor
     ``th`` less its falling trend over that time."""
     if cs[CS_N] > cs[CS_NREQ]:
@@ -719,7 +719,7 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
     if cs[CS_THETA_N] >= THETA_TREND_N:
         share = THETA_TREND_SHARE * (W1_DROP_MAX - slow) / (W1_DROP_MAX - 1.0)
         th = min(max(th + share * cs[CS_DTHETA] * ctrl[TAU_THETA] * slow, THETA_MIN), THETA_MAX)
-    r = _within_capacity(ctrl, cs, meas, r, t_ref, slip, th, ratio, dt)
+    r = _within_capacity(ctrl, cs, r, t_ref, slip, th, ratio, dt)
     e_t = r - meas[M_TR]
     p_r = _pressure_target(ctrl, cs[CS_KISS], r, slip, th, ratio)
     sens = _pressure_target(ctrl, cs[CS_KISS], r + 1.0, slip, th, ratio) - p_r  # Pa per N m
