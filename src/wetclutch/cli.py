@@ -7,6 +7,7 @@ code 2; output directories are written whole or not at all.
 from __future__ import annotations
 
 import argparse
+import math
 import shlex
 import sys
 from collections.abc import Sequence
@@ -226,7 +227,7 @@ def _cmd_verify(args: argparse.Namespace) -> None:
     seq = (f"; after {args.sequence} launches of each clutch (first launch {100 * res['pass_rate_first_launch']:.1f} %,"
            f" {res['slams']} slams)" if args.sequence > 1 else "")
     reach = res["pass_rate_reachable"]
-    reach = f"; {100 * reach:.1f} % of those some controller can pass" if reach == reach else ""
+    reach = "" if math.isnan(reach) else f"; {100 * reach:.1f} % of those some controller can pass"
     print(f"verify {d.kind}: all requirements in {verify_report.headline(res, _rates(res))}{reach}{seq} -> {args.out}")
 
 

@@ -427,7 +427,7 @@ def _pressed(p: np.ndarray, params: Params) -> np.ndarray:
     return f_n * knee.py_func(f_n, params.friction.F_knee)
 
 
-def capacity_allows(params: Params, result: LaunchResult, levels: int = 64) -> bool:
+def capacity_allows(params: Params, result: LaunchResult) -> bool:
     """Whether some launch on this clutch could meet the two requirements its capacity decides, the steady-state
     error and the ripple over the judged window, along ``result``'s slip.
 
@@ -437,11 +437,11 @@ def capacity_allows(params: Params, result: LaunchResult, levels: int = 64) -> b
     ``p_max`` over the same at the launch's pressure, and at the axle ``eta / i`` of it (the clutch output's
     acceleration left out: in a launch at its capacity the axle torque and ``eta / i T_c`` differ by 0.01 % over the
     judged window). Of the torques under ``T_cap`` with a given mean over the window, the flat-topped
-    ``min(T_cap, c)`` varies least; the clutch allows the launch if one of them, its level ``c`` taken from the
-    lowest whose mean is within the steady-state error of the request to the highest, has its ripple within the
-    limit. A launch that gave the clutch more torque would have slipped less: where the friction falls as the slip
-    falls, which is where a capacity sags, its friction would have been lower, so the test is, if anything,
-    generous there. Where the plates do not slide under pressure (open, or locked) nothing bounds the torque."""
+    ``min(T_cap, c)`` varies least, and its ripple grows with ``c`` (values within ``[0, c]`` about a mean ``m``
+    vary by at most ``(c - m) m``, the Bhatia-Davis bound): the clutch allows the launch if the lowest level whose
+    mean is within the steady-state error of the request has its ripple within the limit. A launch that gave the
+    clutch more torque would have slipped less: where the friction falls as the slip falls, which is where a
+    capacity sags, its friction would have been lower, so the test is, if anything, generous there. Where the plates do not slide under pressure (open, or locked) nothing bounds the torque."""
     w0, w1 = result.summary["steady_window_s"]
     sig, tr = result.signal_columns, result.truth_columns
     win = (sig["time"] >= w0) & (sig["time"] <= w1)
@@ -463,13 +463,8 @@ def capacity_allows(params: Params, result: LaunchResult, levels: int = 64) -> b
 
     if mean_at(top) < (1.0 - err) * ref:
         return False  # the mean falls short of the request whatever the shape
-    lo = brentq(lambda c: mean_at(c) - (1.0 - err) * ref, 0.0, top)
-    hi = brentq(lambda c: mean_at(c) - (1.0 + err) * ref, lo, top) if mean_at(top) > (1.0 + err) * ref else top
-    for c in np.linspace(lo, hi, levels):
-        y = np.minimum(cap, c)
-        if np.sqrt(np.mean((y - y.mean()) ** 2)) / y.mean() * 100.0 <= metrics.REQ_RIPPLE_PCT:
-            return True
-    return False
+    lowest = brentq(lambda c: mean_at(c) - (1.0 - err) * ref, 0.0, top)
+    return metrics.ripple_pct(np.minimum(cap, lowest)) <= metrics.REQ_RIPPLE_PCT
 
 
 def sequence(params: Params, controller: design_.Design | str, conditions: Conditions, n: int,

@@ -151,6 +151,13 @@ def _rms_less_noise(e: np.ndarray, noise: float) -> float:
     return float(np.sqrt(max(np.mean(e ** 2) - noise ** 2, 0.0)))
 
 
+def ripple_pct(y: np.ndarray, noise: float = 0.0) -> float:
+    """RMS of ``y`` about its mean, with the noise's variance (standard deviation ``noise``) taken out, in % of the
+    mean: the ripple of a torque over the judged window."""
+    mean = float(np.mean(y))
+    return _rms_less_noise(y - mean, noise) / mean * 100.0
+
+
 def standby(t: np.ndarray, T_r: np.ndarray, t_req: float) -> tuple[float, float]:
     """(creep, peak): the mean of ``T_r`` over the last :data:`CREEP_WINDOW` before the request, the largest
     :data:`PEAK_WINDOW` mean before it."""
@@ -216,7 +223,7 @@ def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_
     # on the reading itself, not the smoothed one: a smoothing that hides the noise hides an oscillation
     # as fast (a 10 ms mean passes a tenth of 110 Hz); the noise's variance is taken out instead
     noise = noise_std(t, T_r, t_req) if noise is None else noise
-    ripple = _rms_less_noise(T_r[win] - T_ss, noise) / T_ss * 100.0 if T_ss > 0 else np.nan
+    ripple = ripple_pct(T_r[win], noise) if T_ss > 0 else np.nan
     line = np.polyval(np.polyfit(t[win] - w0, T_r[win], 1), t[win] - w0)
     oscillation = _rms_less_noise(T_r[win] - line, noise) / T_ss * 100.0 if T_ss > 0 else np.nan
     slip = after & (t < t_end)
