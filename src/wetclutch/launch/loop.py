@@ -441,7 +441,8 @@ def capacity_allows(params: Params, result: LaunchResult) -> bool:
     vary by at most ``(c - m) m``, the Bhatia-Davis bound): the clutch allows the launch if the lowest level whose
     mean is within the steady-state error of the request has its ripple within the limit. A launch that gave the
     clutch more torque would have slipped less: where the friction falls as the slip falls, which is where a
-    capacity sags, its friction would have been lower, so the test is, if anything, generous there. Where the plates do not slide under pressure (open, or locked) nothing bounds the torque."""
+    capacity sags, its friction would have been lower, so the test is, if anything, generous there. Where the plates
+    do not slide under pressure (open, or locked) nothing bounds the torque."""
     w0, w1 = result.summary["steady_window_s"]
     sig, tr = result.signal_columns, result.truth_columns
     win = (sig["time"] >= w0) & (sig["time"] <= w1)
