@@ -45,7 +45,8 @@ class Controller:
         self.record = np.asarray(record, dtype=float)
         self.dt = float(self.record[control.DT])
         self.state = control.initial_state(kiss_Pa, kiss_Pa != self.record[control.P_KISS], friction_factor,
-                                           friction_slope, control.start_inertia(self.record, output_inertia))
+                                           friction_slope, control.start_inertia(self.record, output_inertia),
+                                           inertia_measured=output_inertia is not None)
 
     @classmethod
     def of(cls, d: design.Design, dt: float = 1e-3) -> Controller:

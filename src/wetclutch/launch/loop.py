@@ -311,7 +311,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     cs = control.initial_state(d.settings["p_kiss"] if start is None else start, start is not None,
                                learnt.friction_factor(temp) if d.kind == "launch" else None,
                                learnt.friction_slope(temp) if d.kind == "launch" else None, inertia or 0.0,
-                               margin or 0.0)
+                               margin or 0.0, learnt.inertia is not None)
     t_after = cond.t_after + (cond.hold_time if cond.post_sync_hold else 0.0)
     coldstart.begin(net, ext, ws)
     zf, lock, m = np.zeros((N_CH, 2)), np.full(1, -1.0), 0
@@ -369,6 +369,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
                    friction_slope_found=slope)
     measured = control.output_inertia(cs) if d.kind == "launch" else None
     summary.update(output_inertia_start_kg_m2=inertia, output_inertia_found_kg_m2=measured)
+    summary.update(request_shaped=bool(cs[control.CS_SHAPED] != 0.0) if d.kind == "launch" else None)
     if found is not None:
         learnt = learnt.learn(temp, found, friction, slope, measured, control.crept(ctrl, cs, resp.creep_Nm))
     return LaunchResult(signals, truth, summary, cond, d.kind, tr.stats, found, learnt)
