@@ -5,10 +5,10 @@ import pandas as pd
 import pytest
 
 from wetclutch.launch import controller as control
-from wetclutch.launch.adaptation import Adaptation
 from wetclutch.launch import design as designs
 from wetclutch.launch import loop as launch
 from wetclutch.launch import metrics
+from wetclutch.launch.adaptation import Adaptation
 from wetclutch.errors import WetclutchError
 from wetclutch.params import Params
 from wetclutch.plant import clutch
