@@ -123,7 +123,8 @@ SETTINGS: dict[str, dict[str, Setting]] = {
                                             "up the torque's lag behind it, gives it back as the torque comes ahead"),
         "tau_ref": Setting("s", 0.0, 10.0, "time constant of each of the request prefilter's two stages"),
         "ref_rise": Setting("s", 0.0, 0.5, "rise time of the request's S-curve (a raised cosine), taken instead of the two "
-                                           "stages where the clutch output rings against the axle"),
+                                           "stages where the clutch output rings against the axle or no launch has "
+                                           "measured it yet"),
         "tau_theta": Setting("s", 0.0, 10.0, "time constant of the friction-factor estimate"),
         "theta0": Setting("-", 0.1, 10.0, "friction factor assumed until it is measured"),
         "dither_amp": Setting("V", 0.0, 5.0, "dither amplitude before the request"),
