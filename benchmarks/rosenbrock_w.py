@@ -22,10 +22,15 @@ Usage: ``python benchmarks/rosenbrock_w.py`` (about a minute)
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 
-from wetclutch.launch import design, metrics, verify
-from wetclutch.launch import loop as launch
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from stiffness import TEMP, run_watched, state_names
+
 from wetclutch.params import Params
 from wetclutch.physics import actuator
 from wetclutch.plant import clutch
@@ -33,7 +38,6 @@ from wetclutch.sim import integrator
 from wetclutch.sim.rhs import rhs_call
 from wetclutch.sim.workspace import FS_AMP, FS_T, IS_EVENTS, IS_REJECTED, IS_SETTLE, IS_STEPS, SETTLE_INPUT, Workspace
 
-T_REF, TEMP = 100.0, 85.0
 #: ROS34PW2 in Hairer's form: (I - gamma h W) k_i = h f(y + sum a_ij k_j) + h W sum g_ij k_j; y1 = y + sum b_i k_i
 GAMMA = 4.3586652150845900e-01
 A = np.array([[0.0, 0.0, 0.0, 0.0],
@@ -99,19 +103,15 @@ def w_sample(ws: Workspace, net, ext, t0: float, t1: float, rtol: float, atol: n
 
 def main() -> None:
     params = Params()
+    names, _ = state_names(params)
+    stem = names.index(f"speed {clutch.STEM}")
     rn = clutch.build(params, 0.0, config="clutch", temp_C=TEMP)
-    bodies = [b.name for b in rn.network.bodies]
-    stem = bodies.index(clutch.STEM)
     brake = [c.name for c in rn.network.clutches].index("stem_friction")
-    names = [f"speed {b}" for b in bodies] + [f"deflection {s.name}" for s in rn.network.springs]
-    names += [f"state {i}" for i in range(len(names), rn.network.actuator_state)]
-    names += ["coil current", "clutch pressure", "oil in", "oil out", "magnetisation"]
     rows: list[tuple] = []
     worst = {True: np.zeros(64, int), False: np.zeros(64, int)}
     h_next = {True: 1e-4, False: 1e-4}
-    advance = launch.advance
 
-    def watched(net, ext, ws, t_stop, dt, t_out0, rtol, atol, *rest):
+    def watched(advance, net, ext, ws, t_stop, dt, t_out0, rtol, atol, *rest):
         start, ext0 = Workspace(*[a.copy() for a in ws]), ext.copy()
         before = (ws.istate[IS_STEPS], ws.istate[IS_REJECTED], ws.istate[IS_EVENTS])
         status = advance(net, ext, ws, t_stop, dt, t_out0, rtol, atol, *rest)
@@ -129,14 +129,7 @@ def main() -> None:
             rows.append(tuple(figures))
         return status
 
-    launch.advance = watched
-    compiled = launch._closed_loop
-    launch._closed_loop = compiled.py_func  # the per-sample loop in Python, the engine compiled
-    try:
-        cond = launch.Conditions(t_ref=T_REF, oil_temp_C=TEMP, t_max=launch.Conditions().t_request + verify.HORIZON)
-        launch.simulate(params, design.cached(params), cond, nominal=metrics.Response.empty())
-    finally:
-        launch.advance, launch._closed_loop = advance, compiled
+    cond = run_watched(watched)
     a = np.array(rows)
     print("per 1 ms sample without events: steps / rejected / right-hand-side evaluations (the median over the "
           "samples of the end state's largest distance from the engine's, in error weights)")

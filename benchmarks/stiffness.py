@@ -60,12 +60,26 @@ def jacobian(t: float, x: np.ndarray, net, ext, ws) -> np.ndarray:
     return jac
 
 
+def run_watched(watch) -> launch.Conditions:
+    """Run the verification launch (:data:`T_REF`, :data:`TEMP`) of the default design on the built-in rig with its
+    per-sample loop in Python, ``watch(advance, net, ext, ws, t_stop, *args)`` called for each sample in place of the
+    engine's ``advance``; returns the launch's conditions."""
+    advance, compiled = launch.advance, launch._closed_loop
+    launch.advance = lambda *args: watch(advance, *args)
+    launch._closed_loop = compiled.py_func  # the per-sample loop in Python, the engine compiled
+    try:
+        cond = launch.Conditions(t_ref=T_REF, oil_temp_C=TEMP, t_max=launch.Conditions().t_request + verify.HORIZON)
+        launch.simulate(Params(), design.cached(Params()), cond, nominal=metrics.Response.empty())
+    finally:
+        launch.advance, launch._closed_loop = advance, compiled
+    return cond
+
+
 def main() -> None:
     names, atol = state_names(Params())
     per_sample: list[tuple[float, int, int, int, float]] = []
-    advance = launch.advance
 
-    def watched(net, ext, ws, t_stop, *args):
+    def watched(advance, net, ext, ws, t_stop, *args):
         before = (ws.istate[IS_STEPS], ws.istate[IS_REJECTED], ws.istate[IS_EVENTS])
         status = advance(net, ext, ws, t_stop, *args)
         per_sample.append((t_stop, ws.istate[IS_STEPS] - before[0], ws.istate[IS_REJECTED] - before[1],
@@ -87,14 +101,7 @@ def main() -> None:
                       f"{DOPRI5_REAL_BOUND / abs(lam[k]) * 1e3:.3f} ms")
         return status
 
-    launch.advance = watched
-    compiled = launch._closed_loop
-    launch._closed_loop = compiled.py_func  # the per-sample loop in Python, the engine compiled
-    try:
-        cond = launch.Conditions(t_ref=T_REF, oil_temp_C=TEMP, t_max=launch.Conditions().t_request + verify.HORIZON)
-        launch.simulate(Params(), design.cached(Params()), cond, nominal=metrics.Response.empty())
-    finally:
-        launch.advance, launch._closed_loop = advance, compiled
+    cond = run_watched(watched)
     a = np.array(per_sample)
     t_req = cond.t_request
     print("\nper 1 ms sample: accepted steps, rejected steps, located events")
