@@ -17,7 +17,7 @@ engine's counted as seven a step attempt, its stages and a restart's), the state
 steps, and how far the end states lie from the engine's in units of the error weight (``atol + rtol |x|``: the
 largest over the states, its median over the samples).
 
-Usage: ``python benchmarks/rosenbrock_w.py`` (about a minute)
+Usage: ``python benchmarks/rosenbrock_w.py`` (a few seconds)
 """
 
 from __future__ import annotations
