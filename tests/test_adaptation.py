@@ -20,8 +20,10 @@ def test_a_drifted_kiss_point_is_found_and_learnt(shift, temp):
     runs = loop.sequence(plant, d, loop.Conditions(t_ref=100.0, oil_temp_C=temp), 3)
     for r in runs:
         assert r.kiss_found_Pa == pytest.approx(true, abs=0.12e5)
-    # from the second launch on it starts where the first found it and does not slam
-    assert runs[1].summary["kiss_start_Pa"] == pytest.approx(runs[0].kiss_found_Pa)
+    # from the second launch on it starts where the first found it and does not slam; a kiss point so low that a dip
+    # from the hold there would not lower the magnet's force is set aside, and the launch starts from the design's
+    expected = runs[0].kiss_found_Pa if shift > 0.0 else d.settings["p_kiss"]
+    assert runs[1].summary["kiss_start_Pa"] == pytest.approx(expected)
     for r in runs[1:]:
         assert r.summary["overshoot_pct"] < 25.0, r.summary
     assert runs[-1].adaptation.launches[adaptation.band(temp)] == 3
@@ -132,12 +134,12 @@ def test_a_learnt_kiss_point_is_not_searched_above_while_a_cold_stroke_is_still_
 
 
 def test_a_low_kiss_point_learnt_in_cold_oil_is_set_aside_so_that_the_waiting_vehicle_is_not_pushed():
-    # the default design on a clutch whose kiss point is 0.39 bar (the design's 0.70), at 11 C: the hold's input there is
-    # near the bottom of its range (about 0.5 V), and the lowest input does not cross the magnet's play from there.
-    # Held at the kiss point the first launch learnt, the later launches' plates touched in the hold, the pressure
-    # jumped some 0.25 bar above it and no input could bring it down: 11.0-11.2 N m of creep on the second launches
-    # and 15.1-16.6 N m on the third (seeds 1-4). Placing the kiss point as a first launch does (its search has the
-    # input high when the plates touch, and the dip then drains the pressure) keeps them within 7.3-8.8 N m
+    # the default design on a clutch whose kiss point is 0.39 bar (the design's 0.70), at 11 C: the hold's input
+    # there is near the bottom of its range, and the lowest input does not cross the magnet's play from there. Held
+    # at the kiss point the first launch learnt, the later launches' plates touched in the hold, and no input could
+    # bring the trapped pressure down: 11.0-11.2 N m of creep on the second launches and 15.1-16.6 N m on the third
+    # (seeds 1-4). Placing the kiss point as a first launch does (its search has the input high when the plates
+    # touch, and the dip then drains the pressure) keeps them within 7.3-8.8 N m
     plant = load(overrides={
         "hydraulics.p_prestress": 0.226e5, "hydraulics.x_contact": 1.11e-3, "hydraulics.leak_85C": 3.7e-12,
         "hydraulics.line_length": 1.68, "hydraulics.air_fraction": 0.0086, "hydraulics.p_supply": 7.78e5,
@@ -148,7 +150,8 @@ def test_a_low_kiss_point_learnt_in_cold_oil_is_set_aside_so_that_the_waiting_ve
     assert hold_input < design.record(d, 1e-3)[control.U_MIN] + 2.0 * d.settings["valve_play"]
     for seed in (1, 3):
         runs = loop.sequence(plant, d, loop.Conditions(t_ref=150.0, oil_temp_C=11.0, seed=seed), 3)
-        assert runs[1].summary["kiss_start_Pa"] == pytest.approx(runs[0].kiss_found_Pa)
+        assert runs[0].kiss_found_Pa < 0.45e5  # learnt, and set aside: the later launches start from the design's
+        assert [r.summary["kiss_start_Pa"] for r in runs[1:]] == [d.settings["p_kiss"]] * 2
         creep = [r.summary["creep_Nm"] for r in runs]
         assert max(creep) < 0.9 * metrics.REQ_CREEP_NM and all(r.summary["all_pass"] for r in runs), creep
 

@@ -57,7 +57,7 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       below the kiss point (``CS_MARGIN``, :mod:`wetclutch.launch.adaptation`). A
       kiss point learnt on earlier launches is set aside, and the launch places it as
       a first launch does, where the map puts it within twice the play of the bottom
-      of the input range (a low kiss point in cold oil, :func:`_dip_drains`) and no
+      of the input range (a low kiss point, in cold oil most, :func:`_dip_drains`) and no
       launch has crept there yet (no margin learnt). At such a kiss point the hold
       waits on the magnet's rising branch at an input from which even the lowest does
       not cross the play: once the plates' contact has trapped the pressure above the
