@@ -104,7 +104,7 @@ RUNS = (("step41", "step", dict(level=1.5, oil_temp_C=41.0, seed=1)),
         ("stair", "staircase", dict(config="valve-only", input_mode="pwm", level=0.15, from_=0.0, seed=3)))
 
 
-def chain(overrides: dict, root: Path, samples: int, seed: int, sequence: int) -> dict:
+def chain(overrides: dict, root: Path, samples: int, seed: int, sequence: int) -> tuple[dict, str]:
     """Rig runs, identification, design and the two verifications of one clutch: the pass rates (last launch, first
     launch) on each, and what the clutch's failing samples fail on their last launch."""
     plant = load(overrides=overrides)

@@ -355,9 +355,9 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     t_peak, limit = float(np.max(truth["T_plate"])), p.thermal.T_plate_limit_C
     summary.update(T_plate_peak_C=t_peak, T_plate_limit_C=limit, T_plate_over_limit=bool(t_peak > limit))
     found = float(cs[control.CS_KISS]) if d.kind == "launch" and cs[control.CS_FOUND] else None
-    # a learnt kiss point the launch set aside (see the controller's ``_dip_drains``): it started from the design's
-    set_aside = start is not None and d.kind == "launch" and cs[control.CS_KISS_LEARNT] == 0.0
-    kiss_start = (d.settings["p_kiss"] if start is None or set_aside else start) if d.kind == "launch" else None
+    # the learnt kiss point, unless the launch set it aside (``_dip_drains``) and started from the design's
+    kiss_start = ((start if cs[control.CS_KISS_LEARNT] != 0.0 else d.settings["p_kiss"]) if d.kind == "launch"
+                  else None)
     summary.update(kiss_start_Pa=kiss_start, kiss_found_Pa=found, hold_margin_Pa=margin)
     friction = (float(cs[control.CS_THETA_LEARNT]) if d.kind == "launch" and cs[control.CS_THETA_N] >= control.THETA_LEARN_N
                 else None)
