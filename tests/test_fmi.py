@@ -31,6 +31,7 @@ from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
 from wetclutch import params
+from wetclutch.errors import WetclutchError
 from wetclutch.launch import Conditions, metrics, simulate
 from wetclutch.launch.controller import MEASURED
 
@@ -73,6 +74,7 @@ def test_fmus_pass_fmpy_validation(fmus, product):
     else:
         assert {*MEASURED, "t_ref"} == {n for n, v in names.items() if v.causality == "input"}
         assert [n for n, v in names.items() if v.causality == "output"] == ["u"]
+        assert {n for n, v in names.items() if v.causality == "parameter"} == {"kiss_Pa", "hold_margin_Pa"}
 
 
 @pytest.mark.parametrize(("oil", "load"), [(None, None), (85.0, 25.0)])
@@ -173,6 +175,37 @@ def test_the_controller_started_from_a_learnt_kiss_point_acts_as_the_native_loop
     assert learnt != d.settings["p_kiss"]
     ctrl = Controller(design.record(d, DT), learnt, runs[1].summary["friction_factor_start"],
                       runs[1].summary["friction_slope_start"], runs[1].summary["output_inertia_start_kg_m2"])
-    sg = runs[1].signals
-    u = [ctrl.step(dict(zip(MEASURED, row)), r) for row, r in zip(sg[list(MEASURED)].to_numpy(), sg["t_ref"])]
-    assert np.array_equal(np.array(u), sg["u"].to_numpy())
+    assert np.array_equal(_replayed(ctrl, runs[1].signals), runs[1].signals["u"].to_numpy())
+
+
+def _replayed(ctrl, sg) -> np.ndarray:
+    """The inputs ``ctrl`` gives, sample by sample, fed a launch's recorded measurements and request."""
+    return np.array([ctrl.step(dict(zip(MEASURED, row)), r) for row, r in zip(sg[list(MEASURED)].to_numpy(),
+                                                                             sg["t_ref"])])
+
+
+def test_the_controller_holds_a_learnt_margin_below_the_kiss_point_as_the_native_loop_does():
+    # a cold clutch whose hold pushed the waiting vehicle beyond the creep limit on its first launch (a stiffly
+    # damped stem creeping into the supply port): the second launch holds the plates a learnt margin further apart.
+    # The exported controller, started from the learnt kiss point and that margin, must give the native loop's input
+    # at every sample; started without the margin it holds higher and does not
+    from wetclutch.fmi.controller import Controller
+    from wetclutch.launch import adaptation, design, loop
+
+    plant = params.load(overrides={
+        "hydraulics.p_prestress": 79687.33104791325, "hydraulics.x_contact": 0.0016452917997275848,
+        "friction.mu_scale": 1.161949344641164, "friction.mu_slope": 0.5850790391916972,
+        "hydraulics.p_supply": 735563.1743817655, "valve.d_stem": 111.63189414728596,
+        "driveline.J_1": 0.0026427959483580708, "hydraulics.line_length": 1.8756802503030086,
+        "driveline.ratio": 0.4755098635991616, "engage.T_load": 15.893686726351167})
+    d = design.cached(params.Params(), "launch")
+    runs = loop.sequence(plant, d, Conditions(t_ref=36.7, oil_temp_C=15.8, seed=1320871885, t_max=2.45), 2)
+    s = runs[1].summary
+    assert runs[0].summary["creep_Nm"] > metrics.REQ_CREEP_NM and s["hold_margin_Pa"] == adaptation.MARGIN_STEP
+    args = (design.record(d, DT), s["kiss_start_Pa"], s["friction_factor_start"], s["friction_slope_start"],
+            s["output_inertia_start_kg_m2"])
+    u = runs[1].signals["u"].to_numpy()
+    assert np.array_equal(_replayed(Controller(*args, hold_margin=s["hold_margin_Pa"]), runs[1].signals), u)
+    assert not np.array_equal(_replayed(Controller(*args), runs[1].signals), u)
+    with pytest.raises(WetclutchError, match="hold_margin must be in 0..10000 Pa"):
+        Controller(*args, hold_margin=-1.0)

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..errors import WetclutchError
+from ..launch import adaptation
 from ..launch import controller as control
 from ..launch import design
 
@@ -38,15 +39,23 @@ class Controller:
         The friction factor's slope with slip learnt there (1/(rad/s)), if any.
     output_inertia
         The clutch output's inertia measured in earlier launches (kg m^2), if any (else the design's).
+    hold_margin
+        How far (Pa) below the kiss point the hold keeps the plates: learnt in earlier launches at this oil
+        temperature whose waiting vehicle was pushed too hard
+        (:meth:`wetclutch.launch.adaptation.Adaptation.hold_margin`), 0 if none. With a margin, a learnt kiss point
+        is kept where the launch would otherwise set it aside, as in the native loop.
     """
 
     def __init__(self, record: np.ndarray, kiss_Pa: float, friction_factor: float | None = None,
-                 friction_slope: float | None = None, output_inertia: float | None = None) -> None:
+                 friction_slope: float | None = None, output_inertia: float | None = None,
+                 hold_margin: float = 0.0) -> None:
+        if not 0.0 <= hold_margin <= adaptation.MARGIN_MAX:
+            raise WetclutchError(f"hold_margin must be in 0..{adaptation.MARGIN_MAX:g} Pa (got {hold_margin:g})")
         self.record = np.asarray(record, dtype=float)
         self.dt = float(self.record[control.DT])
         self.state = control.initial_state(kiss_Pa, kiss_Pa != self.record[control.P_KISS], friction_factor,
                                            friction_slope, control.start_inertia(self.record, output_inertia),
-                                           inertia_measured=output_inertia is not None)
+                                           margin=hold_margin, inertia_measured=output_inertia is not None)
 
     @classmethod
     def of(cls, d: design.Design, dt: float = 1e-3) -> Controller:

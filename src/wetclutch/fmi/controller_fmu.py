@@ -7,7 +7,8 @@ needs a Python with ``wetclutch`` installed (see the README).
 Inputs: the measured channels ``p_clutch`` (Pa), ``T_r`` (N m), ``omega_p``, ``omega_1``,
 ``omega_r``, ``omega_s`` (rad/s), ``cvt_ratio`` (the CVT's present ratio ``w_r / w_1``; 0: unknown, the
 design's is used), ``oil_temp`` (C) and the request ``t_ref`` (N m); output
-``u``, the valve's DC input (V); parameter ``kiss_Pa``, the kiss point it starts from.
+``u``, the valve's DC input (V); parameters ``kiss_Pa``, the kiss point it starts from, and ``hold_margin_Pa``,
+how far below it the hold keeps the plates (0 unless learnt in earlier launches).
 Each step takes one controller sample: the step size must be the sample time (``dt``),
 and the output after a step from ``t`` is the input to hold from ``t`` on (so a master
 steps the controller before the plant, as the closed launch loop does; a master that
@@ -43,6 +44,7 @@ class WetclutchController(Fmi2Slave):
         self._record = data["record"]
         self.dt = float(data.get("dt", 1e-3))
         self.kiss_Pa = float(data.get("kiss_Pa", 0.0))
+        self.hold_margin_Pa = 0.0
         self.register_variable(String("kind", causality=Fmi2Causality.local, variability=Fmi2Variability.constant,
                                       description="controller kind (as designed)"))
         self.register_variable(Real("dt", causality=Fmi2Causality.local, variability=Fmi2Variability.constant,
@@ -50,6 +52,10 @@ class WetclutchController(Fmi2Slave):
         self.register_variable(Real("kiss_Pa", causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed,
                                     description="kiss point the controller starts from (the design's, or one learnt "
                                                 "in earlier launches) [Pa]"))
+        self.register_variable(Real("hold_margin_Pa", causality=Fmi2Causality.parameter,
+                                    variability=Fmi2Variability.fixed,
+                                    description="how far below the kiss point the hold keeps the plates, learnt in "
+                                                "earlier launches whose waiting vehicle was pushed too hard [Pa]"))
         self._in = {name: 0.0 for name in INPUTS}
         for name in INPUTS:
             self.register_variable(Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
@@ -65,7 +71,7 @@ class WetclutchController(Fmi2Slave):
         return with_initial_unknowns(super().to_xml(model_options or {}))
 
     def exit_initialization_mode(self) -> None:
-        self._ctrl = Controller(self._record, self.kiss_Pa)
+        self._ctrl = Controller(self._record, self.kiss_Pa, hold_margin=self.hold_margin_Pa)
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         assert self._ctrl is not None
