@@ -225,10 +225,11 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
         What varies (default: :data:`wetclutch.launch.ranges.DEFAULT_FILE`).
     replay_args
         Options every replay command carries (e.g. `` --param-file F --controller-file C``). Without them a
-        replay runs on the built-in rig's parameters and designs its controller on the replayed plant itself:
-        it reproduces the sample only where ``plant`` is the built-in rig and ``design`` was made on it; a
-        design under test saved as a controller file (the text of :func:`wetclutch.launch.settings.to_toml`), the
-        plant as a parameter file, and ``--param-file`` and ``--controller-file`` with them make the replay exact.
+        replay runs on the built-in rig's parameters with the sample's changes and designs its controller on that
+        changed plant, not ``design``: it does not reproduce the sample. The design under test saved as a
+        controller file (the text of :func:`wetclutch.launch.settings.to_toml`), the plant as a parameter file,
+        and ``--param-file`` and ``--controller-file`` with them make the replay exact (``wetclutch verify`` passes
+        the controller file it writes beside its results, and its parameter file if any).
     sequence
         Launches per sample, the adaptation carried over (see :func:`run_sample`).
     scheduler
