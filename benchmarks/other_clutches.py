@@ -114,11 +114,11 @@ def chain(overrides: dict, root: Path, samples: int, seed: int, sequence: int) -
         recs.append(ident.load(root / name / "measured.csv"))
     found = ident.identify(recs).identified
     d = design.design(found, "launch")
-    out = {}
+    out, results = {}, {}
     for which, p in (("identified", found), ("clutch", plant)):
-        r = verify.run(d, p, n=samples, seed=seed, sequence=sequence, progress=False)
-        out[which] = (r["pass_rate"], r["pass_rate_first_launch"])
-    return out, kinds(failing(r))
+        results[which] = verify.run(d, p, n=samples, seed=seed, sequence=sequence, progress=False)
+        out[which] = (results[which]["pass_rate"], results[which]["pass_rate_first_launch"])
+    return out, kinds(failing(results["clutch"]))
 
 
 def main() -> None:
