@@ -81,8 +81,8 @@ _PATCHES = (
     ("sim/integrator.py", "            ws.istate[IS_REJECTED] += 1\n            continue",
      "            ws.istate[IS_REJECTED] += 1\n            tp = tick(ws, 4, tp)\n            continue"),
     ("sim/integrator.py", "        t_ev, e_ev = _locate_event(t, t_new, h, y_old, ws, net, ext)\n",
-     "        tp = tick(ws, 4, tp)\n        t_ev, e_ev = _locate_event(t, t_new, h, y_old, ws, net, ext)\n"
-     "        tp = tick(ws, 5, tp)\n"),
+     ("        tp = tick(ws, 4, tp)\n        t_ev, e_ev = _locate_event(t, t_new, h, y_old, ws, net, ext)\n"
+      "        tp = tick(ws, 5, tp)\n")),
     ("sim/integrator.py", "                   out_t, out_x, out_aux, out_mode)\n        if t_ev != np.inf:\n",
      "                   out_t, out_x, out_aux, out_mode)\n        tp = tick(ws, 6, tp)\n        if t_ev != np.inf:\n"),
     ("sim/integrator.py", "            direction = ws.fstate[FS_PLAY_DIR]\n",
@@ -90,19 +90,19 @@ _PATCHES = (
     ("sim/integrator.py", "                ws.istate[IS_TURNS] += 1\n            continue",
      "                ws.istate[IS_TURNS] += 1\n            tp = tick(ws, 8, tp)\n            continue"),
     ("sim/integrator.py", "        if at_lim and (hit_bp or hit_pwm):\n            bp_i, after_edge, ok = _time_event(",
-     "        tp = tick(ws, 9, tp)\n        if at_lim and (hit_bp or hit_pwm):\n"
-     "            bp_i, after_edge, ok = _time_event("),
-    ("sim/integrator.py", "                return ERR_SINGULAR\n        else:\n            copy(ws.K[0], ws.K[6])\n"
-                          "            copy(ws.g_old, ws.g_new)\n            copy(ws.aux, ws.aux_new)\n",
-     "                return ERR_SINGULAR\n            tp = tick(ws, 10, tp)\n        else:\n"
-     "            copy(ws.K[0], ws.K[6])\n            copy(ws.g_old, ws.g_new)\n            copy(ws.aux, ws.aux_new)\n"
-     "            tp = tick(ws, 9, tp)\n"),
+     ("        tp = tick(ws, 9, tp)\n        if at_lim and (hit_bp or hit_pwm):\n"
+      "            bp_i, after_edge, ok = _time_event(")),
+    ("sim/integrator.py", ("                return ERR_SINGULAR\n        else:\n            copy(ws.K[0], ws.K[6])\n"
+                           "            copy(ws.g_old, ws.g_new)\n            copy(ws.aux, ws.aux_new)\n"),
+     ("                return ERR_SINGULAR\n            tp = tick(ws, 10, tp)\n        else:\n"
+      "            copy(ws.K[0], ws.K[6])\n            copy(ws.g_old, ws.g_new)\n            copy(ws.aux, ws.aux_new)\n"
+      "            tp = tick(ws, 9, tp)\n")),
     ("sim/integrator.py", "    # the last grid point, when it falls on t_stop",
      "    tp = tick(ws, 11, tp)\n    # the last grid point, when it falls on t_stop"),
     ("sim/integrator.py", "            gm = _event_value(e, tm, t, h, y_old, ws, net, ext)\n",
-     f"            count(ws, {EVALUATIONS})\n            if _sliding(e, ws, net) < 0:\n"
-     f"                count(ws, {FULL_EVALUATIONS})\n"
-     "            gm = _event_value(e, tm, t, h, y_old, ws, net, ext)\n"),
+     (f"            count(ws, {EVALUATIONS})\n            if _sliding(e, ws, net) < 0:\n"
+      f"                count(ws, {FULL_EVALUATIONS})\n"
+      "            gm = _event_value(e, tm, t, h, y_old, ws, net, ext)\n")),
     ("sim/integrator.py",
      "    # golden-section search for the least slip on the dense output (its slip is smooth within the step)\n",
      f"    count(ws, {DIP_SEARCHES})\n"),
@@ -111,10 +111,10 @@ _PATCHES = (
     ("launch/loop.py", "        _true_values(net, ws.x, probe, temp, truth)\n",
      "        tq = tnow(ws)\n        _true_values(net, ws.x, probe, temp, truth)\n"),
     ("launch/loop.py",
-     "        status = advance(net, ext, ws, (k + 1) * dt, dt, 0.0, rtol, atol, np.inf, out_t, out_x, out_aux, "
-     "out_mode)\n",
-     "        tq = tick(ws, 1, tq)\n        status = advance(net, ext, ws, (k + 1) * dt, dt, 0.0, rtol, atol, np.inf, "
-     "out_t, out_x, out_aux, out_mode)\n        tq = tick(ws, 0, tq)\n"),
+     ("        status = advance(net, ext, ws, (k + 1) * dt, dt, 0.0, rtol, atol, np.inf, out_t, out_x, out_aux, "
+      "out_mode)\n"),
+     ("        tq = tick(ws, 1, tq)\n        status = advance(net, ext, ws, (k + 1) * dt, dt, 0.0, rtol, atol, np.inf, "
+      "out_t, out_x, out_aux, out_mode)\n        tq = tick(ws, 0, tq)\n")),
 )
 
 _DRIVER = f'''
@@ -158,20 +158,21 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         _instrumented(Path(tmp))
         env = {**os.environ, "PYTHONPATH": tmp, "NUMBA_CACHE_DIR": str(Path(tmp) / "cache")}
-        out = subprocess.run([sys.executable, "-W", "ignore", "-c", _DRIVER], env=env, capture_output=True, text=True)
+        out = subprocess.run([sys.executable, "-W", "ignore", "-c", _DRIVER], env=env, capture_output=True, text=True,
+                             check=False)
     if out.returncode != 0:
         sys.exit(out.stderr.strip().splitlines()[-1])
     table, stats = ast.literal_eval(out.stdout.strip().splitlines()[-1])
     whole = table[0][0] + table[1][0]
     print(f"one verification launch: {stats['steps']} steps, {stats['rejected']} rejected, {stats['events']} events, "
-          f"{stats['mode_switches']} mode changes; {whole / 1e6:.2f} ms in its samples (shares of that)")
+           f"{stats['mode_switches']} mode changes; {whole / 1e6:.2f} ms in its samples (shares of that)")
     print(f"{'section':36s} {'ms':>7s} {'share':>6s} {'times':>7s} {'ns each':>8s}")
     for k, name in enumerate(SECTIONS):
         ns, n = table[k]
         print(f"{name:36s} {ns / 1e6:7.2f} {100 * ns / whole:5.1f}% {int(n):7d} {ns / max(n, 1):8.0f}")
     print(f"event-function evaluations while locating: {int(table[EVALUATIONS][1])}, of them a whole right-hand "
-          f"side (not a sliding clutch's slip): {int(table[FULL_EVALUATIONS][1])}; golden-section searches for a "
-          f"slip's dip: {int(table[DIP_SEARCHES][1])}")
+           f"side (not a sliding clutch's slip): {int(table[FULL_EVALUATIONS][1])}; golden-section searches for a "
+           f"slip's dip: {int(table[DIP_SEARCHES][1])}")
 
 
 if __name__ == "__main__":
