@@ -13,6 +13,7 @@ Usage: ``python benchmarks/launch_profile.py``
 
 from __future__ import annotations
 
+import argparse
 import ast
 import os
 import shutil
@@ -62,6 +63,7 @@ def tick(ws, k, t0):
 
 @njit(_nrt=False, inline="always")
 def count(ws, k):
+    """Count one more of counter ``k``."""
     ws.evlog[ws.evlog.shape[0] - {ROWS} + k, 1] += 1.0
 '''
 
@@ -155,6 +157,7 @@ def _instrumented(dst: Path) -> None:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()  # no options: refuse any
     with tempfile.TemporaryDirectory() as tmp:
         _instrumented(Path(tmp))
         env = {**os.environ, "PYTHONPATH": tmp, "NUMBA_CACHE_DIR": str(Path(tmp) / "cache")}
