@@ -143,6 +143,23 @@ def test_launch_and_verify_bad_input(tmp_path, cli_refuses, args, fragment):
     cli_refuses(args, fragment, tmp_path / "never")
 
 
+@pytest.mark.parametrize(
+    ("args", "what"),
+    [
+        (["simulate", "engage", "--param-file"], "parameter file"),
+        (["launch", "--controller-file"], "controller file"),
+        (["launch", "--adaptation"], "adaptation file"),
+        (["verify", "--ranges"], "ranges file"),
+        (["identify", "nonexistent.csv", "--channels"], "channel map"),
+    ],
+)
+def test_a_binary_file_where_a_toml_file_belongs_is_refused_in_one_line(tmp_path, cli_refuses, args, what):
+    # a recording (here: bytes that are not UTF-8, as in a MAT or MF4 file) given by mistake for a TOML input
+    binary = tmp_path / "measured.mat"
+    binary.write_bytes(b"MATLAB 5.0 MAT-file\x00\xc8\xff\xfe" * 8)
+    cli_refuses([*args, str(binary)], f"{what} '{binary}' is not a text file", tmp_path / "never")
+
+
 def test_write_error_inside_the_output_is_a_one_line_error(tmp_path):
     # disk full or permissions while the files are written: a WetclutchError (the CLI prints it
     # as one line, exit 2) and neither the temporary nor the target directory stays behind

@@ -83,7 +83,7 @@ from typing import Any
 import tomli_w
 from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, ValidationError, field_validator
 
-from .errors import ParameterError
+from .errors import ParameterError, read_text
 
 #: oil temperatures (C) at which the rig runs and the oil model holds; every oil temperature is checked against it
 OIL_TEMP_RANGE_C = (-30.0, 150.0)
@@ -312,10 +312,7 @@ def load(
     data = (base or Params()).model_dump()
     if param_file is not None:
         path = Path(param_file)
-        try:
-            text = path.read_text()
-        except OSError as err:
-            raise ParameterError(f"cannot read parameter file '{path}': {err.strerror}") from None
+        text = read_text(path, "parameter file", ParameterError)
         try:
             given = tomllib.loads(text)
         except tomllib.TOMLDecodeError as err:

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import WetclutchError
+from ..errors import WetclutchError, read_text
 from ..physics.actuator import CONFIGS
 from ..rig.experiments import EXPERIMENTS, MEASURED_UNITS
 from ..rig.files import read_columns
@@ -103,10 +103,8 @@ def read_channel_map(path: str | Path | None) -> dict[str, dict[str, str]]:
         return {}
     path = Path(path)
     try:
-        raw = tomllib.loads(path.read_text())
-    except OSError as err:
-        raise WetclutchError(f"cannot read channel map '{path}': {err.strerror or err}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raw = tomllib.loads(read_text(path, "channel map"))
+    except tomllib.TOMLDecodeError as err:
         raise WetclutchError(f"channel map '{path}' is not valid TOML: {str(err).splitlines()[0]}") from None
     out: dict[str, dict[str, str]] = {}
     for key, entry in raw.items():

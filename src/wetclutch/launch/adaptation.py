@@ -30,7 +30,7 @@ from pathlib import Path
 
 import tomli_w
 
-from ..errors import WetclutchError
+from ..errors import WetclutchError, read_text
 from ..params import OIL_TEMP_RANGE_C
 from .controller import FRICTION_SLOPE_MAX, J1_MAX, THETA_MAX, THETA_MIN
 
@@ -169,8 +169,4 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
 
 def load(path: str | Path) -> Adaptation:
     """The adaptation state in file ``path``."""
-    try:
-        text = Path(path).read_text()
-    except OSError as e:
-        raise WetclutchError(f"cannot read adaptation file '{path}': {e.strerror}") from None
-    return loads(text, str(path))
+    return loads(read_text(path, "adaptation file"), str(path))

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import WetclutchError
+from ..errors import WetclutchError, read_text
 from ..params import Params, load as load_params
 
 DEFAULT_FILE = Path(__file__).resolve().parent / "data" / "ranges.toml"
@@ -140,9 +140,7 @@ def load(path: str | Path | None = None) -> list[Range]:
     """The ranges of the TOML file ``path`` (default: :data:`DEFAULT_FILE`)."""
     path = Path(path) if path is not None else DEFAULT_FILE
     try:
-        data = tomllib.loads(path.read_text())
-    except OSError as e:
-        raise RangesError(f"cannot read ranges file '{path}': {e.strerror}") from None
+        data = tomllib.loads(read_text(path, "ranges file", RangesError))
     except tomllib.TOMLDecodeError as e:
         raise RangesError(f"ranges file '{path}' is not valid TOML: {str(e).splitlines()[0]}") from None
     return parse(data, str(path))

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 import tomli_w
 
-from ..errors import ParameterError, WetclutchError
+from ..errors import ParameterError, WetclutchError, read_text
 from ..params import flatten, load as load_params
 from .design import (BASELINE_DEFAULTS, KINDS, LAUNCH_DEFAULTS, MAP_TEMPS, PLANT_SETTINGS, SETTINGS, Design,
                      plant_settings)
@@ -158,8 +158,4 @@ def loads(text: str, source: str = "controller file", kind: str | None = None) -
 def load(path: str | Path, kind: str | None = None) -> Design:
     """The design in controller file ``path`` (see :func:`loads`)."""
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as e:
-        raise ControllerFileError(f"cannot read controller file '{path}': {e.strerror}") from None
-    return loads(text, str(path), kind)
+    return loads(read_text(path, "controller file", ControllerFileError), str(path), kind)
