@@ -14,8 +14,8 @@ from wetclutch.errors import WetclutchError
 from wetclutch.launch import design as designs
 from wetclutch.launch import ranges
 from wetclutch.launch import settings as files
-from wetclutch.params import Params, load
-from wetclutch.physics import friction, oil
+from wetclutch.params import Friction, Params, load
+from wetclutch.physics import oil
 
 
 @pytest.fixture(scope="module")
@@ -83,7 +83,7 @@ def test_friction_curve_slope_keeps_the_mean_over_the_slip_span():
     poly = [-1.7e-6, 2.7e-4, 2.6e-2]
     w = np.linspace(0.0, 150.0, 30001)
     for slope in (0.0, 0.5, 1.0, 2.0):
-        c = friction.curve(poly, 1.2, slope, 150.0)
+        c = Friction(mu_slip_poly=poly, mu_scale=1.2, mu_slope=slope, mu_slip_span=150.0).curve()
         # the mean friction over the launch's slip (trapezoidal quadrature) is the level alone
         assert np.trapezoid(np.polyval(c, w), w) / 150.0 == pytest.approx(
             1.2 * np.trapezoid(np.polyval(poly, w), w) / 150.0, rel=1e-9)
@@ -91,8 +91,8 @@ def test_friction_curve_slope_keeps_the_mean_over_the_slip_span():
         assert np.polyval(c, 150.0) - np.polyval(c, 0.0) == pytest.approx(
             1.2 * slope * (np.polyval(poly, 150.0) - np.polyval(poly, 0.0)))
     # no slope: a flat curve at the mean (about 0.0335 for the study's fit)
-    assert friction.curve(poly, 1.0, 0.0, 150.0)[-1] == pytest.approx(0.0335, abs=1e-4)
-    np.testing.assert_array_equal(friction.curve(poly, 1.0, 1.0, 150.0), np.array(poly))
+    assert Friction(mu_slip_poly=poly, mu_slope=0.0).curve()[-1] == pytest.approx(0.0335, abs=1e-4)
+    np.testing.assert_array_equal(Friction(mu_slip_poly=poly).curve(), np.array(poly))
 
 
 def test_two_point_fit_recovers_a_first_order_plus_dead_time_step():

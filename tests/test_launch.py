@@ -323,7 +323,7 @@ def test_a_request_beyond_the_clutchs_capacity_shows_the_valve_input_at_its_top(
     # window (half the samples: the dither reaches it on its upper half) and falls short; 100 N m never needs it.
     p = params_load(overrides={"driveline.ratio": 1.0, "friction.mu_scale": 0.79, "hydraulics.p_supply": 5.0e5})
     f, h, d = p.friction, p.hydraulics, p.driveline
-    curve = friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_span)
+    curve = f.curve()
     mu_max = max(friction.mu(curve, s) for s in np.linspace(0.0, d.omega_p0, 301))
     drag = f.drag_20C * oil.dynamic_viscosity(85.0) / oil.dynamic_viscosity(20.0) * d.omega_p0
     bound = d.eta / d.ratio * (mu_max * h.A_p * (h.p_supply - (h.p_prestress + h.k_reset * h.x_contact / h.A_p)) + drag)

@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import math
 import tomllib
 
+import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import wetclutch as wc
 from wetclutch import params as pm
+from wetclutch.params import Friction
+from wetclutch.cli import main
 from wetclutch.errors import ParameterError
 
 PATHS = [row[0] for row in pm.describe(wc.Params())]
@@ -91,6 +95,9 @@ def test_any_override_validates_or_fails_in_one_line(path, value):
     except ParameterError as err:
         assert "\n" not in str(err) and str(err)
     else:
+        # a boolean or a string is never read as a number, however it would convert
+        flat = value if isinstance(value, list) else [value]
+        assert not any(isinstance(v, (bool, str)) for v in flat)
         section, key = path.split(".")
         got = getattr(getattr(p, section), key)
         if isinstance(got, list):
@@ -108,3 +115,190 @@ def test_random_toml_files_never_crash(tmp_path_factory, text):
         wc.load_params(f)
     except ParameterError as err:
         assert "\n" not in str(err)
+
+
+NUMERIC = [path for path, value, _, _ in pm.describe(wc.Params()) if not isinstance(value, list)]
+
+
+def _refused(overrides: dict) -> str:
+    with pytest.raises(ParameterError) as err:
+        wc.load_params(overrides=overrides)
+    msg = str(err.value)
+    assert "\n" not in msg
+    return msg
+
+
+# --- friction law: mu(slip) positive over the slips of a run
+
+
+@pytest.mark.parametrize(("poly", "got"), [([0.0], "it is 0 at 0 rad/s"), ([-0.03], "it is -0.03 at 0 rad/s"),
+                                           ([-1e-4, 0.0], "at 150 rad/s")])
+def test_a_friction_law_without_friction_is_refused_by_name(poly, got):
+    msg = _refused({"friction.mu_slip_poly": poly})
+    assert msg.startswith("friction.mu_slip_poly")
+    assert "must be > 0 for slip 0..150 rad/s" in msg and "driveline.omega_p0" in msg and got in msg
+
+
+def test_a_dip_of_mu_between_grid_points_is_found():
+    # negative only within 0.03 rad/s of 75.1 rad/s: the least value lies where the derivative vanishes
+    poly = [1e-3, -2 * 75.1e-3, 75.1**2 * 1e-3 - 1e-6]
+    assert np.polyval(poly, 75.0) > 0 and np.polyval(poly, 75.1) < 0
+    assert "at 75.1 rad/s" in _refused({"friction.mu_slip_poly": poly})
+
+
+def test_the_slip_range_is_the_primarys_starting_speed():
+    # the default curve crosses zero at 226 rad/s
+    assert wc.load_params(overrides={"driveline.omega_p0": 220.0}).driveline.omega_p0 == 220.0
+    msg = _refused({"driveline.omega_p0": 300.0})
+    assert "friction.mu_slip_poly" in msg and "slip 0..300 rad/s" in msg and "at 300 rad/s" in msg
+
+
+def test_the_steepness_that_turns_mu_negative_is_refused_and_named():
+    assert wc.load_params(overrides={"friction.mu_slope": 1.5}).friction.mu_slope == 1.5
+    msg = _refused({"friction.mu_slope": 10.0})
+    assert "friction.mu_slip_poly" in msg and "friction.mu_slope" in msg
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.lists(st.floats(-1e-2, 1e-2, allow_subnormal=False), min_size=2, max_size=2),
+    st.floats(-0.05, 0.1, allow_subnormal=False),
+    st.floats(0.5, 2.0), st.floats(0.0, 3.0), st.floats(0.0, 300.0), st.floats(0.0, 400.0),
+)
+def test_a_quadratic_friction_law_loads_if_and_only_if_mu_is_positive(ab, c, scale, slope, span, w0):
+    a, b = ab[0] * 1e-4, ab[1] * 1e-2
+    coef = Friction(mu_slip_poly=[a, b, c], mu_scale=scale, mu_slope=slope, mu_slip_span=span).curve()
+    # the least of a quadratic on 0..w0: at an end or at its vertex
+    cand = [0.0, w0] + ([-coef[1] / (2 * coef[0])] if coef[0] > 0 else [])
+    least = min(float(np.polyval(coef, s)) for s in cand if 0.0 <= s <= w0)
+    assume(abs(least) > 1e-12)  # no verdict on a law that touches zero within rounding
+    over = {"friction.mu_slip_poly": [a, b, c], "friction.mu_scale": scale, "friction.mu_slope": slope,
+            "friction.mu_slip_span": span, "driveline.omega_p0": w0}
+    if least > 0:
+        wc.load_params(overrides=over)
+    else:
+        assert "friction.mu_slip_poly" in _refused(over)
+
+
+def test_the_temperature_law_keeps_friction_at_every_oil_temperature():
+    assert wc.load_params(overrides={"thermal.mu_temp": -2e-3, "thermal.T_mu_ref_C": 40.0}).thermal.mu_temp == -2e-3
+    msg = _refused({"thermal.mu_temp": 0.01})
+    assert "thermal.mu_temp 0.01" in msg and "thermal.T_mu_ref_C 85" in msg and "-30 C" in msg
+    assert "150 C" in _refused({"thermal.mu_temp": -0.01, "thermal.T_mu_ref_C": 0.0})
+
+
+# --- types: numbers only, integers included
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.sampled_from(NUMERIC), st.one_of(st.booleans(), st.text(max_size=5)))
+def test_a_boolean_or_a_string_is_never_a_number(path, value):
+    msg = _refused({path: value})
+    assert f"parameter '{path}': must be a number (got " in msg
+
+
+@pytest.mark.parametrize(("value", "shown"), [(True, "true"), (False, "false"), ("0.5", '"0.5"')])
+def test_the_reported_type_mistakes_are_refused(value, shown):
+    for path in ("driveline.ratio", "valve.play_exponent"):
+        assert _refused({path: value}) == f"parameter '{path}': must be a number (got {shown})"
+
+
+def test_integers_still_pass_as_numbers(tmp_path):
+    p = wc.load_params(overrides={"driveline.ratio": 1, "valve.play_exponent": 4, "friction.mu_slip_poly": [0, 1, 3]})
+    assert p.driveline.ratio == 1.0 and isinstance(p.driveline.ratio, float)
+    assert p.valve.play_exponent == 4.0 and p.friction.mu_slip_poly == [0.0, 1.0, 3.0]
+    f = tmp_path / "p.toml"
+    f.write_text("[driveline]\nratio = 1\n")
+    assert wc.load_params(f).driveline.ratio == 1.0
+
+
+def test_a_boolean_in_a_parameter_file_is_refused(tmp_path):
+    f = tmp_path / "p.toml"
+    f.write_text("[driveline]\nratio = true\n")
+    with pytest.raises(ParameterError, match=r"^parameter 'driveline.ratio': must be a number \(got true\)$"):
+        wc.load_params(f)
+
+
+def test_a_string_in_a_list_is_refused_by_index():
+    assert _refused({"friction.mu_slip_poly": [1e-3, "2"]}) == \
+        "parameter 'friction.mu_slip_poly.1': must be a number (got \"2\")"
+
+
+# --- what was given, and why it is wrong
+
+
+@pytest.mark.parametrize(("path", "value", "shown"), [
+    ("engage.T_cap", float("nan"), "nan"), ("engage.T_cap", float("inf"), "inf"),
+    ("driveline.eta", -math.inf, "-inf"), ("friction.mu_slip_poly", [0.01, float("nan")], None),
+])
+def test_a_value_that_is_not_finite_is_said_to_be_so(path, value, shown):
+    msg = _refused({path: value})
+    assert "must be a finite number" in msg and "less than" not in msg and "greater than" not in msg
+    if shown:
+        assert msg == f"parameter '{path}': must be a finite number (got {shown})"
+
+
+@pytest.mark.parametrize(("value", "shown"), [({"a": 1}, "{a = 1}"), ([1.0, 2.0], "[1.0, 2.0]")])
+def test_a_table_or_an_array_given_for_a_number_is_shown(value, shown):
+    assert _refused({"engage.T_cap": value}) == f"parameter 'engage.T_cap': must be a number (got {shown})"
+
+
+# --- parameters that must fit together, checked as the record is built
+
+
+@pytest.mark.parametrize(("overrides", "names"), [
+    ({"driveline.ratio_min": 3.0}, ("driveline.ratio_min 3", "driveline.ratio_max 2.5")),
+    ({"hydraulics.p_relief": 1.0}, ("hydraulics.p_relief 1 Pa", "hydraulics.p_prestress 50000 Pa")),
+    ({"hydraulics.p_prestress": 9e5}, ("hydraulics.p_supply 800000 Pa", "hydraulics.p_prestress 900000 Pa")),
+    # the stroke alone lifts the kiss point above the supply: 50000 Pa + k_reset 0.05 m / 0.0105 m^2
+    ({"hydraulics.x_contact": 0.05, "hydraulics.A_p": 0.0105}, ("hydraulics.p_supply", "hydraulics.p_prestress")),
+])
+def test_parameters_that_do_not_fit_together_are_refused_naming_both(overrides, names):
+    msg = _refused(overrides)
+    assert all(n in msg for n in names), msg
+
+
+@pytest.mark.parametrize("item", ["driveline.ratio_min=3", "hydraulics.p_relief=1", "hydraulics.p_prestress=900000",
+                                  "friction.mu_slip_poly=[-0.03]", "driveline.ratio=true", "engage.T_cap={a=1}"])
+def test_params_show_refuses_in_one_line(capsys, item):
+    assert main(["params", "show", "--set", item]) == 2
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("wetclutch: error: ") and item.split("=")[0] in err[0]
+    assert "Traceback" not in captured.err
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(0.06, 20.0), st.floats(0.06, 20.0), st.floats(0.06, 20.0))
+def test_the_cvt_limits_load_if_and_only_if_they_are_in_order(ratio, lo, hi):
+    # the launch ratio itself may lie outside them (an identified ratio a little below the CVT's lowest, a rig's
+    # fixed gear): only the post-sync hold, which shifts within them, asks for it inside
+    over = {"driveline.ratio": ratio, "driveline.ratio_min": lo, "driveline.ratio_max": hi}
+    if lo <= hi:
+        assert wc.load_params(overrides=over).driveline.ratio == ratio
+    else:
+        msg = _refused(over)
+        assert ("driveline.ratio_min" in msg) and ("driveline.ratio_max" in msg)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(0.0, 5e6), st.floats(1e3, 5e6), st.floats(1e3, 5e6), st.floats(1e-4, 0.05))
+def test_the_kiss_point_loads_if_and_only_if_below_supply_and_relief(prestress, supply, relief, stroke):
+    over = {"hydraulics.p_prestress": prestress, "hydraulics.p_supply": supply, "hydraulics.p_relief": relief,
+            "hydraulics.x_contact": stroke}
+    h = wc.Params().hydraulics
+    kiss = prestress + h.k_reset * stroke / h.A_p
+    if kiss < min(supply, relief):
+        wc.load_params(overrides=over)
+    else:
+        msg = _refused(over)
+        assert "hydraulics.p_prestress" in msg and ("hydraulics.p_supply" in msg or "hydraulics.p_relief" in msg)
+
+
+def test_a_section_changed_in_place_is_checked_too():
+    p = wc.Params()
+    with pytest.raises(ValueError, match="driveline.ratio_max"):
+        p.driveline.ratio_min = 3.0
+    with pytest.raises(ValueError, match="float_type"):
+        p.driveline.ratio = True
+    assert p.driveline.ratio_min == 0.4 and p.driveline.ratio == 0.5

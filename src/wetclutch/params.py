@@ -4,7 +4,12 @@ Parameters live in sections (``driveline``, ``clutch``, ``engage``); each has a
 unit, a one-line description and a physical range. They are read from TOML
 files (``--param-file``), overridden one by one (``--set driveline.ratio=0.6``,
 the value read as a TOML literal), printed (``wetclutch params show``) and
-written back complete (``wetclutch params export``).
+written back complete (``wetclutch params export``). Every parameter is a finite number (an
+integer will do; a boolean or a string will not), and some must fit together: the CVT's limits
+in order, the kiss point below the supply and the relief pressures, ``mu(slip)``
+positive over the slips of a run and friction left at every oil temperature. These are checked
+as a record is built (a section's own again when one of its values is assigned), so a set that
+cannot run is refused before any run.
 
 Default values and why (see also ``docs/model.md``, "Default parameters"):
 
@@ -80,8 +85,10 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import tomli_w
-from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic_core import PydanticCustomError
 
 from .errors import ParameterError, read_text
 
@@ -101,8 +108,36 @@ def _f(default: float, unit: str, description: str, **bounds: float) -> Any:
     return Field(default, description=description, json_schema_extra={"unit": unit}, **bounds)
 
 
+#: error type of a check that spans several parameters; its message names them all and is shown as it stands
+_INCONSISTENT = "inconsistent"
+
+
+def _inconsistent(message: str) -> PydanticCustomError:
+    """The validation error of parameters that do not fit together; ``message`` names each of them."""
+    # the message goes in as context, not as the template, so that braces in it are not read as fields
+    return PydanticCustomError(_INCONSISTENT, "{message}", {"message": message})
+
+
 class _Section(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False)
+    # strict: a boolean or a string given for a number is a mistake in the file or on the command line, not a
+    # number (pydantic's lax mode reads ``true`` as 1.0 and ``"0.5"`` as 0.5); integers still pass as floats.
+    # allow_inf_nan off: every parameter is a finite number, and NaN is refused as such, not by a failed bound.
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False, strict=True,
+                              allow_inf_nan=False)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        """Assign and validate ``name``; a value refused by a check across fields leaves the old one in place.
+
+        pydantic runs a section's model validators after it has stored the new value, so without
+        this a refused assignment would leave the section holding the very value it refused.
+        """
+        old = self.__dict__.get(name)
+        try:
+            super().__setattr__(name, value)
+        except ValidationError:
+            if name in type(self).model_fields:
+                self.__dict__[name] = old
+            raise
 
 
 class Driveline(_Section):
@@ -127,6 +162,25 @@ class Driveline(_Section):
     # the ratio (d_a i^2), must outweigh up to the 150 N m of a hard launch.
     d_a: float = _f(5.0, "N m s/rad", "flexible axle damping", ge=0.0, le=1e5)
     omega_p0: float = _f(150.0, "rad/s", "primary flywheel speed at the start of a run", ge=0.0, le=2000.0)
+
+    @model_validator(mode="after")
+    def _ratio_within_limits(self) -> Driveline:
+        """Refuse CVT limits that are crossed.
+
+        Returns
+        -------
+        Driveline
+            This section, unchanged.
+
+        Raises
+        ------
+        PydanticCustomError
+            ``ratio_min`` above ``ratio_max``.
+        """
+        if self.ratio_min > self.ratio_max:
+            raise _inconsistent(f"driveline.ratio_min {self.ratio_min:g} must not exceed driveline.ratio_max "
+                                f"{self.ratio_max:g}")
+        return self
 
 
 class Clutch(_Section):
@@ -202,11 +256,40 @@ class Hydraulics(_Section):
     relief_conductance: float = _f(1e-9, "m^3/(s Pa)", "relief valve flow per Pa above cracking", gt=0.0, le=1e-3)
     air_fraction: float = _f(0.005, "-", "entrained air volume fraction at atmospheric pressure", ge=0.0, lt=0.5)
 
+    @model_validator(mode="after")
+    def _plates_reachable(self) -> Hydraulics:
+        """Refuse a clutch whose plates touch only at or above the pressure the supply or the relief valve allows.
+
+        The plates touch at ``p_prestress + k_reset x_contact / A_p`` (the kiss point,
+        :func:`wetclutch.physics.actuator.contact_pressure`); the clutch pressure rises at most to
+        the supply pressure and stops rising where the relief valve cracks. A kiss point at or
+        above either is a clutch that never carries torque.
+
+        Returns
+        -------
+        Hydraulics
+            This section, unchanged.
+
+        Raises
+        ------
+        PydanticCustomError
+            The kiss point is not below ``p_supply`` or not below ``p_relief``.
+        """
+        # the section cannot call actuator.contact_pressure (it takes a whole Params, and actuator imports this
+        # module); the same formula on the section's own fields
+        kiss = self.p_prestress + self.k_reset * self.x_contact / self.A_p
+        for name, limit in (("p_supply", self.p_supply), ("p_relief", self.p_relief)):
+            if not kiss < limit:
+                raise _inconsistent(f"hydraulics.{name} {limit:g} Pa is not above the kiss point {kiss:g} Pa "
+                                    f"(hydraulics.p_prestress {self.p_prestress:g} Pa + k_reset x_contact / A_p): "
+                                    "the clutch would never carry torque")
+        return self
+
 
 class Friction(_Section):
     """Plate friction: T_max = mu(slip) * mu_scale * F_n * F_n / (F_n + F_knee), mu turned by mu_slope about its mean over 0..mu_slip_span."""
 
-    mu_slip_poly: list[FiniteFloat] = Field(
+    mu_slip_poly: list[float] = Field(
         [-1.7e-6, 2.7e-4, 2.6e-2],
         description="mu vs slip (rad/s) polynomial, highest power first (lumped: faces x radius x coefficient)",
         json_schema_extra={"unit": "m"},
@@ -221,6 +304,22 @@ class Friction(_Section):
     F_knee: float = _f(100.0, "N", "normal force below which friction drops (plates barely pressed)", ge=0.0, le=1e5)
     drag_20C: float = _f(0.013, "N m s", "open-clutch viscous drag coefficient at 20 C (scales with viscosity)", ge=0.0, le=10.0)
 
+    def curve(self) -> np.ndarray:
+        """The ``mu(slip)`` coefficients (highest power first) the model runs on: ``mu_slip_poly`` at level
+        ``mu_scale`` and steepness ``mu_slope``.
+
+        ``mu'(w) = mu_scale * (m + mu_slope * (mu(w) - m))`` with ``m`` the mean of ``mu`` over slips
+        ``0 .. mu_slip_span`` (its value at zero slip if ``mu_slip_span`` is 0): the slip-dependent terms are
+        multiplied by ``mu_slope`` and the constant moved so that the mean over that span is ``mu_scale * m``
+        whatever the steepness.
+        """
+        c = np.asarray(self.mu_slip_poly, dtype=float)
+        ref = float(np.polyval(np.polyint(c), self.mu_slip_span)) / self.mu_slip_span if self.mu_slip_span > 0.0 \
+            else float(c[-1])
+        out = c * self.mu_slope
+        out[-1] += (1.0 - self.mu_slope) * ref
+        return out * self.mu_scale
+
 
 class Thermal(_Section):
     """Heat of the clutch pack: a lumped heat capacity cooled by the oil flowing through it."""
@@ -234,6 +333,35 @@ class Thermal(_Section):
     mu_temp: float = _f(0.0, "1/K", "relative change of friction per kelvin of plate temperature (0: none, as the study found)", ge=-0.05, le=0.05)
     T_mu_ref_C: float = _f(85.0, "C", "plate temperature at which friction has its nominal value", ge=-30.0, le=400.0)
     T_plate_limit_C: float = _f(200.0, "C", "plate temperature above which the launch report warns (paper linings and ATF age fast above it)", gt=0.0, le=600.0)
+
+    @model_validator(mode="after")
+    def _friction_at_every_oil_temperature(self) -> Thermal:
+        """Refuse a temperature law that leaves the clutch without friction at an oil temperature the rig runs at.
+
+        The capacity is multiplied by ``1 + mu_temp (T - T_mu_ref_C)`` (clipped at 0,
+        :func:`wetclutch.physics.thermal.friction_factor`); a run's plates start at the oil's
+        temperature, anywhere in :data:`OIL_TEMP_RANGE_C`. The factor is linear in ``T``, so it is
+        positive over that range if it is at both ends. Hotter plates may still fade to no
+        friction (the clip): that is a state of a run, not of the parameters.
+
+        Returns
+        -------
+        Thermal
+            This section, unchanged.
+
+        Raises
+        ------
+        PydanticCustomError
+            The factor is not positive at one end of the oil temperature range.
+        """
+        for temp in OIL_TEMP_RANGE_C:
+            factor = 1.0 + self.mu_temp * (temp - self.T_mu_ref_C)
+            if not factor > 0.0:
+                raise _inconsistent(f"thermal.mu_temp {self.mu_temp:g} 1/K with thermal.T_mu_ref_C "
+                                    f"{self.T_mu_ref_C:g} C leaves no friction at oil temperature {temp:g} C "
+                                    f"(1 + mu_temp (T - T_mu_ref_C) = {factor:g}); runs start at oil temperatures "
+                                    f"{OIL_TEMP_RANGE_C[0]:g}..{OIL_TEMP_RANGE_C[1]:g} C")
+        return self
 
 
 class Rig(_Section):
@@ -255,17 +383,99 @@ class Params(_Section):
     thermal: Thermal = Field(default_factory=Thermal)
     rig: Rig = Field(default_factory=Rig)
 
+    @model_validator(mode="after")
+    def _friction_positive_over_slip(self) -> Params:
+        """Refuse a friction law whose ``mu(slip)`` is not positive over the slips of a run.
+
+        A run starts with the primary at ``driveline.omega_p0`` and the clutch output at rest, so
+        the slip runs through ``0 .. omega_p0``; the model runs on the curve of
+        :meth:`Friction.curve` (``mu_slip_poly`` times ``mu_scale``, turned by
+        ``mu_slope`` about its mean over ``0 .. mu_slip_span``). Where that is zero the controller and
+        the design divide by it; where it is negative the clutch would drive instead of brake.
+
+        Returns
+        -------
+        Params
+            This record, unchanged.
+
+        Raises
+        ------
+        PydanticCustomError
+            ``mu`` is zero or negative somewhere in ``0 .. omega_p0``.
+        """
+        f, span = self.friction, self.driveline.omega_p0
+        slip, mu = lowest_mu(f, span)
+        if not mu > 0.0:
+            shaped = ("" if f.mu_scale == 1.0 and f.mu_slope == 1.0
+                      else " (times friction.mu_scale, turned by friction.mu_slope)")
+            raise _inconsistent(f"friction.mu_slip_poly {_shown(f.mu_slip_poly)}: mu(slip){shaped} must be > 0 for "
+                                f"slip 0..{span:g} rad/s (0..driveline.omega_p0); it is {mu:.3g} at {slip:.4g} rad/s")
+        return self
+
+
+def lowest_mu(f: Friction, slip_max: float) -> tuple[float, float]:
+    """The least ``mu`` of the friction law ``f`` (as the model runs it) over slips ``0 .. slip_max``, and where.
+
+    Parameters
+    ----------
+    f
+        The friction section.
+    slip_max
+        The greatest slip (rad/s), at least 0.
+
+    Returns
+    -------
+    tuple[float, float]
+        ``(slip, mu)``: the slip (rad/s) at which ``mu`` (m) is least, and that ``mu``.
+    """
+    coef = f.curve()
+    # the least of a polynomial on an interval lies at an end or where its derivative vanishes; a grid besides
+    # guards against roots lost to rounding (every candidate is a true value, so none can refuse a good law)
+    slips = [np.linspace(0.0, slip_max, 65)]
+    if coef.size > 2:
+        crit = np.roots(np.polyder(coef))
+        slips.append(np.clip(crit.real, 0.0, slip_max))
+    s = np.concatenate(slips)
+    mu = np.polyval(coef, s)
+    i = int(np.argmin(mu))
+    return float(s[i]), float(mu[i])
+
+
+#: what a parameter must be, by pydantic's error type, where its own message speaks of Python ("Input should be a
+#: valid number" for a boolean, a string or a table; NaN failing a bound as if it were a number)
+_MUST_BE = {
+    "float_type": "must be a number",
+    "finite_number": "must be a finite number",
+    "list_type": "must be an array of numbers",
+}
+
+
+def _shown(value: Any) -> str:
+    """``value`` as it would be written in a parameter file or after ``--set`` (TOML), for an error message."""
+    if isinstance(value, dict):
+        text = "{" + ", ".join(f"{k} = {_shown(v)}" for k, v in value.items()) + "}"
+    elif isinstance(value, (list, tuple)):
+        text = "[" + ", ".join(_shown(v) for v in value) + "]"
+    else:
+        try:
+            text = _literal(value)
+        except (TypeError, ValueError):  # not a TOML value (None, an object given through the Python API)
+            text = repr(value)
+    # one line, and short: the parameter's name comes first and must not drown
+    text = text.encode("unicode_escape").decode()
+    return text if len(text) <= 80 else text[:77] + "..."
+
 
 def _one_line(err: ValidationError) -> str:
     e = err.errors()[0]
     path = ".".join(str(p) for p in e["loc"]).encode("unicode_escape").decode()
     if e["type"] == "extra_forbidden":
         return f"unknown parameter '{path}'"
-    got = e.get("input")
-    got_s = "" if isinstance(got, dict) else f" (got {got!r})"
-    # a validator's own message without pydantic's "Value error, " before it
-    msg = e["msg"].removeprefix("Value error, ")
-    return f"parameter '{path}': {msg}{got_s}"
+    if e["type"] == _INCONSISTENT:
+        # a check across parameters: its message names each of them with its value
+        return e["msg"]
+    msg = _MUST_BE.get(e["type"]) or e["msg"].removeprefix("Value error, ")  # a validator's own message
+    return f"parameter '{path}': {msg} (got {_shown(e.get('input'))})"
 
 
 def _validate(data: dict[str, Any]) -> Params:

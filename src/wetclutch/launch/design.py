@@ -289,7 +289,7 @@ def torque_step(params: Params, table: np.ndarray, fill: np.ndarray, hold_offset
     """
     p_kiss = actuator.contact_pressure(params)
     f = params.friction
-    mu = float(np.polyval(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_span), 100.0))
+    mu = float(np.polyval(f.curve(), 100.0))
     d = params.driveline
     t_c = TUNE_TORQUE * d.ratio / d.eta
     f_n = friction.force_for.py_func(t_c / mu, f.F_knee)
@@ -342,7 +342,7 @@ def plant_settings(plant: Params, origin: dict[str, str] | None = None) -> dict[
     :func:`design`."""
     origin = origin or {}
     f, h, d, v = plant.friction, plant.hydraulics, plant.driveline, plant.valve
-    poly = np.trim_zeros(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_span), "f")
+    poly = np.trim_zeros(f.curve(), "f")
     if poly.size > controller.N_MU:
         # the controller's friction law is quadratic (the study's fit); dropping terms would be silent
         raise WetclutchError(f"friction.mu_slip_poly: the launch controller takes at most a quadratic, "

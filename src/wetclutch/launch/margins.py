@@ -66,7 +66,6 @@ import numpy as np
 
 from ..errors import WetclutchError
 from ..params import Params
-from ..physics import friction
 from . import ranges as ranges_mod
 from .controller import TAU_W1_RATE, THETA_TREND_SHARE, inertia_taken
 from .design import Design, fill_times, torque_step
@@ -111,7 +110,7 @@ def _finite(x: float | None) -> float:
 def driveline(plant: Params, t_ref: float) -> control.TransferFunction:
     """``G_dl``: axle torque over the clutch torque seen at the axle, DC gain 1 (module docstring)."""
     d, f = plant.driveline, plant.friction
-    coef = friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_span)
+    coef = f.curve()
     slip = d.omega_p0
     mu = max(float(np.polyval(coef, slip)), 1e-4)
     dmu = float(np.polyval(np.polyder(coef), slip))

@@ -55,21 +55,3 @@ def mu(coef, slip):
     for c in coef:
         v = v * s + c
     return v
-
-
-def curve(poly, scale: float = 1.0, slope: float = 1.0, slip_span: float = 0.0) -> np.ndarray:
-    """The ``mu(slip)`` coefficients (highest power first) of a clutch with level ``scale`` and steepness ``slope``.
-
-    ``mu'(w) = scale * (m + slope * (mu(w) - m))`` with ``m`` the mean of ``mu`` over slips
-    ``0 .. slip_span`` (its value at zero slip if ``slip_span`` is 0): the slip-dependent terms are
-    multiplied by ``slope`` and the constant moved so that the mean over that span is ``scale * m``
-    whatever the steepness.
-    """
-    c = np.asarray(poly, dtype=float)
-    if slip_span > 0.0:
-        ref = float(np.polyval(np.polyint(c), slip_span)) / slip_span
-    else:
-        ref = float(c[-1])
-    out = c * slope
-    out[-1] += (1.0 - slope) * ref
-    return out * scale

@@ -28,7 +28,7 @@ import numpy as np
 
 from ..params import Params
 from ..physics import actuator as A
-from ..physics import friction, oil
+from ..physics import oil
 from ..physics.actuator import CONFIGS
 from ..sim.network import GROUND, Network, Trajectory, integrate
 from ..sim.signals import Const, Signal
@@ -85,7 +85,7 @@ def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str =
         f = params.friction
         net = driveline.build(params, 0.0, temp_C=temp, plate_temp_C=plate_temp_C, ratio_rate=ratio_rate)
         ci = 0  # the driveline's clutch
-        net.clutches[ci].mu_poly = tuple(friction.curve(f.mu_slip_poly, f.mu_scale, f.mu_slope, f.mu_slip_span))
+        net.clutches[ci].mu_poly = tuple(f.curve())
         # cold oil drags the open plates: viscous torque proportional to viscosity
         drag = f.drag_20C * oil.dynamic_viscosity(temp) / oil.dynamic_viscosity(20.0)
         net.spring("oil_drag", 0, 1, 0.0, drag)
