@@ -392,3 +392,101 @@ def test_sensor_noise_at_rest_is_not_taken_for_the_end_of_the_fills_rise():
         u.append(control.step(rec, cs, meas, 0.0))
     assert min(u) == rec[control.U_MAX]  # full input throughout: the stroke has 0.2 bar to go
     assert cs[control.CS_KISS] == pytest.approx(1.634e5 + d.settings["stroke_span"], abs=0.03e5)
+
+
+def _state() -> adaptation.Adaptation:
+    """A state with two bands, one with everything learnt and one with the kiss point alone."""
+    return adaptation.Adaptation().learn(41.0, 1.0e5, 1.2, 0.002, inertia=0.02, crept=True).learn(85.0, 0.7e5)
+
+
+@pytest.mark.parametrize("field", adaptation.BAND_REQUIRED)
+def test_a_band_without_a_field_the_writer_always_writes_is_refused(field):
+    text = _state().to_toml()
+    row = next(ln for ln in text.splitlines() if ln.startswith(f"{field} = "))
+    with pytest.raises(WetclutchError) as e:
+        adaptation.loads(text.replace(row + "\n", "", 1), "a.toml")
+    assert str(e.value).startswith(f"a.toml: band[0].{field}: missing") and "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("field", ["friction_factor", "friction_slope_per_rad_s", "hold_margin_Pa"])
+def test_a_band_without_what_was_not_learnt_is_read(field):
+    a = _state()
+    text = a.to_toml()
+    row = next(ln for ln in text.splitlines() if ln.startswith(f"{field} = "))
+    back = adaptation.loads(text.replace(row + "\n", "", 1))
+    assert back.kiss(45.0) == a.kiss(45.0) and back.launches == a.launches
+    assert {"friction_factor": back.friction, "friction_slope_per_rad_s": back.slope,
+            "hold_margin_Pa": back.margin}[field] == {}
+
+
+@pytest.mark.parametrize(("from_c", "to_c", "fragment"), [
+    ("33.0", "50.0", "band[0].from_C: 33 C is not the lower edge of a band (-30, -10, 10, 30, 50, 70, 90, 110, 130, "
+                     "150 C)"),
+    ("-50.0", "-30.0", "band[0].from_C: -50 C is not the lower edge"),
+    ("170.0", "190.0", "band[0].from_C: 170 C is not the lower edge"),
+    ("30.0", "70.0", "band[0].to_C: must be from_C + band_C = 50 C (got 70)"),
+    ("30.0", "true", "band[0].to_C: must be a finite number"),
+])
+def test_a_band_off_the_band_edges_is_refused(from_c, to_c, fragment):
+    text = _state().to_toml().replace("from_C = 30.0", f"from_C = {from_c}", 1)
+    text = text.replace("to_C = 50.0", f"to_C = {to_c}", 1)
+    with pytest.raises(WetclutchError) as e:
+        adaptation.loads(text, "a.toml")
+    assert str(e.value).startswith(f"a.toml: {fragment}") and "\n" not in str(e.value)
+
+
+def test_every_band_of_the_allowed_oil_temperatures_round_trips():
+    a = adaptation.Adaptation()
+    for temp in np.arange(-30.0, 151.0, 20.0):
+        a = a.learn(float(temp), 1e5 + temp)
+    assert sorted(a.kiss_Pa) == list(adaptation.BANDS)
+    assert adaptation.loads(a.to_toml()) == a
+
+
+def test_two_tables_for_one_band_are_refused_naming_the_band():
+    text = _state().to_toml()
+    first = text.index("[[band]]")
+    second = text.index("[[band]]", first + 1)
+    twice = text + "\n" + text[first:second]  # the 30..50 C band once more, after the 70..90 C band
+    with pytest.raises(WetclutchError) as e:
+        adaptation.loads(twice, "a.toml")
+    assert str(e.value) == "a.toml: band[2]: band 30..50 C is given twice (band[0] before)"
+
+
+def test_a_whole_number_of_launches_is_not_a_boolean():
+    with pytest.raises(WetclutchError, match=r"band\[0\].launches: must be a whole number"):
+        adaptation.loads(_state().to_toml().replace("launches = 1", "launches = true", 1))
+
+
+import tomli_w  # noqa: E402
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+_number = st.one_of(st.sampled_from([-30.0, 10.0, 30.0, 33.0, 50.0, 150.0, 170.0, 1e5, 0.0]),
+                    st.floats(-1e3, 1e6, allow_nan=False), st.integers(-5, 5), st.booleans(), st.text(max_size=3))
+_edge = st.sampled_from([adaptation.band_from(b) for b in adaptation.BANDS])
+#: a band as the writer writes it, or with any of its fields changed, left out or added
+_band_row = st.one_of(
+    st.builds(lambda lo, kiss, n, extra: {"from_C": lo, "to_C": lo + adaptation.BAND_C, "kiss_Pa": kiss, "launches": n}
+              | extra, _edge, st.floats(0.0, 5e6), st.integers(0, 50),
+              st.dictionaries(st.sampled_from([*adaptation.BAND_FIELDS, "zz"]), _number, max_size=1)),
+    st.dictionaries(st.sampled_from([*adaptation.BAND_FIELDS, "zz"]), _number))
+
+
+@settings(max_examples=200, deadline=None)
+@given(rows=st.lists(_band_row, max_size=4))
+def test_any_band_tables_load_as_the_writer_would_write_them_or_give_one_line(rows):
+    text = tomli_w.dumps({"band_C": adaptation.BAND_C, "band": rows})
+    try:
+        a = adaptation.loads(text, "a.toml")
+    except WetclutchError as e:
+        assert str(e).startswith("a.toml: ") and "\n" not in str(e)
+        return
+    # what was read is one band per table, each on the band edges, and reads back as written
+    assert len(a.kiss_Pa) == len(rows)
+    for row in rows:
+        b = adaptation.band(row["from_C"])
+        assert b in adaptation.BANDS and row["from_C"] == adaptation.band_from(b)
+        assert row["to_C"] == row["from_C"] + adaptation.BAND_C
+        assert a.kiss_Pa[b] == row["kiss_Pa"] and a.launches[b] == row["launches"]
+    assert adaptation.loads(a.to_toml()) == a

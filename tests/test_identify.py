@@ -655,3 +655,129 @@ def test_cli_identify_bad_input_is_one_line_and_writes_nothing(rig_data, tmp_pat
                  ["identify", str(tmp_path / "missing.csv")],
                  ["identify", str(tmp_path / "valve.csv"), "--mu-order", "9"]):
         cli_refuses(args, "error", out)
+
+
+# ---------------------------------------------------------------- channel maps, duplicate runs, the oil temperature
+
+
+@pytest.mark.parametrize(("text", "fragment"), [
+    ('p_clutch = { unit = "bar" }\n', "'p_clutch' has no key 'name'"),
+    ('[oil_temp]\nunit = "K"\n', "'oil_temp' has no key 'name'"),
+    ('p_clutch = { name = "P", unit = "bar", scale = 2 }\n', "'p_clutch' has unknown key 'scale' (known: name, unit)"),
+    ('p_clutch = { name = 5 }\n', "'p_clutch'.name must be a string (got 5)"),
+    ('p_clutch = { name = "P", unit = 1 }\n', "'p_clutch'.unit must be a string (got 1)"),
+    ('p_clutch = { name = " " }\n', "'p_clutch'.name must not be empty"),
+    ("p_clutch = 5\n", "'p_clutch' must be a string (the channel's name) or a table"),
+    ('p_clutch = "u"\n', "'p_clutch' and 'u' both read column 'u' ('u', not in the map, reads the column of its own"),
+    ('T_r = "torque"\nomega_p = "torque"\n', "'T_r' and 'omega_p' both read column 'torque'"),
+])
+def test_a_bad_channel_map_entry_is_one_line_naming_the_entry_and_key(tmp_path, text, fragment):
+    (tmp_path / "map.toml").write_text(text)
+    with pytest.raises(WetclutchError) as e:
+        channels.read_channel_map(tmp_path / "map.toml")
+    assert str(e.value).startswith(f"channel map '{tmp_path / 'map.toml'}': {fragment}") and "\n" not in str(e.value)
+
+
+def test_channel_map_entries_that_swap_column_names_are_read(tmp_path):
+    # a column named like another channel is fine when that channel reads another column
+    (tmp_path / "map.toml").write_text('p_clutch = "u"\nu = { name = "cmd", unit = "%" }\nT_r = "omega_p"\n'
+                                       'omega_p = "n_prim"\n')
+    got = channels.read_channel_map(tmp_path / "map.toml")
+    assert got == {"p_clutch": {"name": "u"}, "u": {"name": "cmd", "unit": "%"}, "T_r": {"name": "omega_p"},
+                   "omega_p": {"name": "n_prim"}}
+
+
+_map_value = st.one_of(st.text(max_size=4), st.integers(-2, 2), st.booleans(),
+                       st.dictionaries(st.sampled_from(["name", "unit", "scale"]),
+                                       st.one_of(st.sampled_from(["u", "p_clutch", "bar", "rpm", "%", "x", ""]),
+                                                 st.integers(0, 2)), max_size=3))
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(entries=st.dictionaries(st.sampled_from([*channels.CHANNELS, "pressure"]), _map_value, max_size=4))
+def test_any_channel_map_reads_as_one_column_per_named_channel_or_gives_one_line(tmp_path, entries):
+    import tomli_w
+
+    (tmp_path / "map.toml").write_text(tomli_w.dumps(entries))
+    try:
+        got = channels.read_channel_map(tmp_path / "map.toml")
+    except WetclutchError as e:
+        assert str(e).startswith(f"channel map '{tmp_path / 'map.toml'}'") and "\n" not in str(e)
+        return
+    assert set(got) == set(entries) and all(e["name"].strip() and set(e) <= {"name", "unit"} for e in got.values())
+    names = [got.get(ch, {}).get("name", ch) for ch in channels.CHANNELS]
+    assert len(set(names)) == len(names)
+
+
+def test_the_same_file_twice_is_refused(rig_data):
+    _, root, _ = rig_data
+    rec = channels.load(root / "step85" / "measured.mat")
+    with pytest.raises(WetclutchError, match=r"^measurement file '.*step85/measured.mat' is given twice$"):
+        ident.identify([rec, channels.load(root / "step41" / "measured.csv"), channels.load(rec.path)])
+    # the same file by another way to it
+    other = channels.load(root / "step41" / ".." / "step85" / "measured.mat")
+    with pytest.raises(WetclutchError, match=r"step41/\.\./step85/measured.mat' is given twice \(as '.*step85/"):
+        ident.identify([rec, other])
+
+
+def test_two_files_of_one_recording_are_refused_naming_both(rig_data, tmp_path):
+    _, root, _ = rig_data
+    mat = channels.load(root / "step85" / "measured.mat")
+    # the run exported in engineering units and printed to 7 digits: still the same recording
+    si = pd.read_csv(root / "step85" / "measured.csv")
+    eng = si.assign(time=si.time * 1e3, p_clutch=si.p_clutch * 1e-5)
+    eng.to_csv(tmp_path / "export.csv", index=False, float_format="%.7g")
+    (tmp_path / "map.toml").write_text('time = { name = "time", unit = "ms" }\np_clutch = { name = "p_clutch", '
+                                       'unit = "bar" }\n')
+    export = channels.load(tmp_path / "export.csv", channels.read_channel_map(tmp_path / "map.toml"))
+    for a, b in ((mat, channels.load(root / "step85" / "measured.csv")), (mat, export),
+                 (channels.load(root / "step85" / "measured.mf4"), mat)):
+        assert channels.same_recording(a, b) and channels.same_recording(b, a)
+        with pytest.raises(WetclutchError) as e:
+            ident.identify([channels.load(root / "step41" / "measured.csv"), a, b])
+        assert str(e.value) == (f"measurement files '{a.path}' and '{b.path}' hold the same recording (time and every "
+                                "channel alike): give each run once")
+
+
+def test_runs_that_differ_are_not_taken_for_one_recording(rig_data):
+    _, root, _ = rig_data
+    rec = channels.load(root / "step85" / "measured.csv")
+    assert not channels.same_recording(rec, channels.load(root / "step41" / "measured.csv"))
+    # one sample of one channel off by a thousandth of its span (a few quantisation steps of the pressure sensor)
+    p = rec.data["p_clutch"].copy()
+    p[3000] += 1e-3 * np.ptp(p)
+    moved = channels.Recording(rec.path, rec.data | {"p_clutch": p}, rec.experiment, rec.config, rec.input_mode)
+    assert not channels.same_recording(rec, moved)
+    # the same samples a sample later
+    late = channels.Recording(rec.path, {c: x[1:] for c, x in rec.data.items()}, rec.experiment, rec.config,
+                              rec.input_mode)
+    assert not channels.same_recording(rec, late)
+    cut = {c: x[:-1] for c, x in rec.data.items()}
+    assert not channels.same_recording(late, channels.Recording(rec.path, cut, rec.experiment, rec.config,
+                                                                rec.input_mode))
+
+
+def test_the_oil_temperature_is_the_median_over_the_clutch_runs_and_says_so(identified):
+    est = identified.estimates["oil_temp_C"]
+    clutch = [r for r in identified.recordings if r.config == "clutch"]
+    assert len(clutch) == 2 and len(identified.recordings) == 4  # two valve-only runs beside them
+    assert est.value == pytest.approx(np.median([r.oil_temp_C for r in clutch]))
+    assert est.unit == "C (median over the clutch runs)"
+    assert [s["file"] for s in est.sources] == [str(r.path) for r in clutch]
+    assert identified.identified.rig.oil_temp_C == pytest.approx(est.value)
+
+
+def test_without_clutch_runs_the_oil_temperature_is_the_median_over_the_runs(rig_data):
+    _, root, _ = rig_data
+    recs = [channels.load(root / n / "measured.csv") for n in ("stair", "noise")]
+    est = ident.identify(recs).estimates["oil_temp_C"]
+    assert est.unit == "C (median over the runs)" and len(est.sources) == 2
+    assert est.value == pytest.approx(np.median([r.oil_temp_C for r in recs]))
+
+
+def test_cli_identify_refuses_one_run_given_twice(rig_data, tmp_path, cli_refuses):
+    _, root, _ = rig_data
+    mat, csv = root / "step85" / "measured.mat", root / "step85" / "measured.csv"
+    cli_refuses(["identify", str(mat), str(mat)], f"measurement file '{mat}' is given twice", tmp_path / "I")
+    cli_refuses(["identify", str(mat), str(csv)], f"measurement files '{mat}' and '{csv}' hold the same recording",
+                tmp_path / "I")

@@ -165,3 +165,67 @@ def test_the_pass_rate_is_the_random_samples_and_the_corners_stand_beside_it():
     z, n, p = 1.959963985, 40, 0.75
     mid, half = (p + z**2 / (2 * n)) / (1 + z**2 / n), z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / (1 + z**2 / n)
     assert res["pass_rate_interval"] == pytest.approx([mid - half, mid + half], rel=1e-6)
+
+
+# ---------------------------------------------------------------- ranges of the launch conditions
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from wetclutch.launch import loop  # noqa: E402
+
+
+@pytest.mark.parametrize(("target", "low", "high", "key"), [
+    ("oil_temp_C", -100.0, 500.0, "low"),
+    ("oil_temp_C", 10.0, 150.5, "high"),
+    ("t_ref", -50.0, 1.0, "low"),
+    ("t_ref", 0.0, 100.0, "low"),  # a launch needs a request above zero
+    ("t_ref", 25.0, 1001.0, "high"),
+    ("noise_scale", -1.0, 1.0, "low"),
+    ("noise_scale", 0.5, 11.0, "high"),
+])
+@pytest.mark.parametrize("dist", ["uniform", "normal"])
+def test_a_condition_range_beyond_what_a_launch_takes_is_refused_naming_file_range_and_end(target, low, high, key,
+                                                                                           dist):
+    data = {"cond": {"target": target, "low": low, "high": high, "dist": dist}}
+    with pytest.raises(ranges.RangesError) as e:
+        ranges.parse(data, "r.toml")
+    msg = str(e.value)
+    assert msg.startswith(f"r.toml: [cond].{key}: {target}") and "\n" not in msg
+
+
+def test_a_condition_range_up_to_what_a_launch_takes_is_accepted_and_draws_within_it():
+    rs = ranges.parse({"oil": {"target": "oil_temp_C", "low": -30.0, "high": 150.0, "dist": "normal", "corner": True},
+                       "req": {"target": "t_ref", "low": 1e-3, "high": 1000.0},
+                       "noise": {"target": "noise_scale", "low": 0.0, "high": 10.0, "dist": "normal"}}, "r.toml")
+    fitted, notes = ranges.fit(rs, Params())
+    assert fitted == rs and notes == []
+    rng = np.random.default_rng(0)
+    for values in [ranges.draw(rs, rng) for _ in range(500)] + ranges.corners(rs):
+        _, cond = ranges.apply(rs, values, Params())
+        loop.Conditions(**cond).checked()  # raises if a launch cannot take a drawn condition
+
+
+@settings(max_examples=300, deadline=None)
+@given(target=st.sampled_from(ranges.CONDITIONS),
+       x=st.one_of(st.floats(-2000.0, 2000.0), st.sampled_from([-30.0, 150.0, 0.0, 1000.0, 10.0, 1e-12, -1e-12])))
+def test_a_conditions_limits_are_those_a_launch_checks(target, x):
+    why = ranges.condition_error(target, x)
+    try:
+        loop.Conditions(**{target: x}).checked()
+    except WetclutchError:
+        assert why is not None and target in why and "\n" not in why
+    else:
+        assert why is None
+
+
+def test_a_condition_range_made_in_code_is_refused_by_fit():
+    r = ranges.Range("hot", "oil_temp_C", low=50.0, high=200.0)
+    with pytest.raises(ranges.RangesError, match=r"range \[hot\] at 200 is outside what a launch takes: oil_temp_C"):
+        ranges.fit([r], Params())
+
+
+def test_cli_verify_refuses_a_condition_range_beyond_what_a_launch_takes(tmp_path, cli_refuses):
+    (tmp_path / "r.toml").write_text('[oil]\ntarget = "oil_temp_C"\nhow = "abs"\nlow = -100\nhigh = 500\n')
+    cli_refuses(["verify", "--ranges", str(tmp_path / "r.toml"), "--samples", "6"],
+                f"{tmp_path / 'r.toml'}: [oil].low: oil_temp_C -100 C is outside -30..150 C", tmp_path / "V")

@@ -46,7 +46,7 @@ from .estimate import Estimate, source, weighted_mean
 from .friction import SLIP_MIN, W_RATIO, commanded_ratio, friction, measured_ratio, slip_samples
 from .inertia import J_P_HELD, REL_SE_MAX, InertiaFit, excited, inertias
 from .onset import Onset, onset
-from .recordings import Recording
+from .recordings import Recording, same_recording
 from .result import Identification, identified_params
 from .ringing import resonance
 from .play import play_half_width
@@ -74,11 +74,12 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
     Raises
     ------
     WetclutchError
-        No recordings, or an order out of range.
+        No recordings, one file given twice or two files holding the same recording, or an order out of range.
     """
     prior = prior or Params()
     if not recordings:
         raise WetclutchError("no measurement files to identify")
+    _check_distinct(recordings)
     if not 0 <= mu_order <= 7:
         raise WetclutchError(f"--mu-order must be 0..7 (got {mu_order})")
     est: dict[str, Estimate] = {}
@@ -136,14 +137,38 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
         src = [source(r.rec, r.t0, r.t1) for r in ringings]
         est["resonance_Hz"] = Estimate(f, fse, "Hz (damped)", src)
         est["damping_ratio"] = Estimate(z, zse, "-", src)
-    temps = [r.oil_temp_C for r in recordings if r.config == "clutch"] or [r.oil_temp_C for r in recordings]
-    est["oil_temp_C"] = Estimate(float(np.median(temps)), float(np.std(temps)), "C (median over the runs)",
-                                 [source(r, r.t[0], r.t[-1]) for r in recordings])
+    # the temperature of the identified clutch: the friction law and the drag come from the clutch runs alone,
+    # pooled over their temperatures; valve-only runs tell nothing of the clutch's oil
+    temp_runs = clutch_runs or list(recordings)
+    temps = [r.oil_temp_C for r in temp_runs]
+    est["oil_temp_C"] = Estimate(float(np.median(temps)), float(np.std(temps)),
+                                 "C (median over the clutch runs)" if clutch_runs else "C (median over the runs)",
+                                 [source(r, r.t[0], r.t[-1]) for r in temp_runs])
     identified = identified_params(prior, est, {k: v for k, (v, _) in notes.items()})
     result = Identification(list(recordings), prior, est, onsets, slips, points, steps, responses, ringings, fits, [],
                             identified, {k: why for k, (_, why) in notes.items()})
     result.validation = validate(result)
     return result
+
+
+def _check_distinct(recordings: Sequence[Recording]) -> None:
+    """Refuse a file given twice and two files holding the same recording (one run as .mat and as .csv).
+
+    A duplicate would count one run twice in every mean and be validated against itself when the other is left out.
+
+    Raises
+    ------
+    WetclutchError
+        One line naming both files.
+    """
+    for j, b in enumerate(recordings):
+        for a in recordings[:j]:
+            if a.path.resolve() == b.path.resolve():
+                raise WetclutchError(f"measurement file '{b.path}' is given twice (as '{a.path}' before)"
+                                     if str(a.path) != str(b.path) else f"measurement file '{b.path}' is given twice")
+            if same_recording(a, b):
+                raise WetclutchError(f"measurement files '{a.path}' and '{b.path}' hold the same recording "
+                                     "(time and every channel alike): give each run once")
 
 
 def _pressure_over_onsets(onsets: Sequence[Onset], name: str) -> Estimate:

@@ -12,6 +12,8 @@ A channel map is a TOML file, one table (or one string) per channel of the rig::
 
     omega_p = "n_prim"      # rename only; the unit comes from the file
 
+A table needs ``name`` and may have ``unit``; two channels cannot read one column.
+
 Units are converted to SI (command ``u`` in V or duty; ``oil_temp`` in C) here
 and nowhere else. A channel's unit is taken from the map, else from the file,
 else from ``meta.json`` beside the file, else the rig's SI unit is assumed.
@@ -39,6 +41,8 @@ REQUIRED = ("time", "u", "p_clutch", "oil_temp")
 DRIVELINE = ("T_r", "omega_p", "omega_1", "omega_r")
 OPTIONAL = ("omega_s",)
 CHANNELS = REQUIRED + DRIVELINE + OPTIONAL
+#: the keys of a channel map's table: ``name`` (required) and ``unit``
+MAP_KEYS = ("name", "unit")
 
 _QUANTITY = {"time": "time", "u": "command", "p_clutch": "pressure", "T_r": "torque", "oil_temp": "temperature",
              **{w: "speed" for w in ("omega_p", "omega_1", "omega_r", "omega_s")}}
@@ -97,6 +101,36 @@ class Recording:
         return float(np.median(self.data["oil_temp"]))
 
 
+#: two recordings are the same if each channel both have agrees to this fraction of its largest magnitude: a CSV's
+#: printed digits or an MDF's single-precision channel round at about 1e-7 of it, two runs' sensor noise and
+#: quantisation differ far above it
+SAME_TOLERANCE = 1e-5
+
+
+def same_recording(a: Recording, b: Recording) -> bool:
+    """Whether ``a`` and ``b`` hold the same recording, whatever their files' formats and units.
+
+    Parameters
+    ----------
+    a, b : Recording
+        Loaded (SI) recordings.
+
+    Returns
+    -------
+    bool
+        True if they have as many samples, the same time steps from their first sample, and every channel that both
+        have agrees within :data:`SAME_TOLERANCE` of the channel's largest magnitude.
+    """
+    if a.t.size != b.t.size:
+        return False
+    for ch in sorted(set(a.data) & set(b.data)):
+        x, y = (a.t - a.t[0], b.t - b.t[0]) if ch == "time" else (a.data[ch], b.data[ch])
+        scale = max(float(np.max(np.abs(x))), float(np.max(np.abs(y))))
+        if np.any(np.abs(x - y) > SAME_TOLERANCE * scale):
+            return False
+    return True
+
+
 def read_channel_map(path: str | Path | None) -> dict[str, dict[str, str]]:
     """Read a channel map (see the module docstring): canonical channel -> {name, unit}."""
     if path is None:
@@ -111,12 +145,34 @@ def read_channel_map(path: str | Path | None) -> dict[str, dict[str, str]]:
         if key not in CHANNELS:
             raise WetclutchError(f"channel map '{path}': unknown channel '{key}' (choose from {', '.join(CHANNELS)})")
         entry = {"name": entry} if isinstance(entry, str) else entry
-        if not isinstance(entry, dict) or set(entry) - {"name", "unit"} or not all(
-                isinstance(v, str) for v in entry.values()):
-            raise WetclutchError(f"channel map '{path}': '{key}' must be a string or a table with name and unit")
+        where = f"channel map '{path}': '{key}'"
+        if not isinstance(entry, dict):
+            raise WetclutchError(f"{where} must be a string (the channel's name) or a table with name and unit")
+        unknown = sorted(set(entry) - set(MAP_KEYS))
+        if unknown:
+            raise WetclutchError(f"{where} has unknown key '{unknown[0]}' (known: {', '.join(MAP_KEYS)})")
+        # a unit without a name would rescale whatever column is named like the channel: say so here, not as
+        # an implausible identification later
+        if "name" not in entry:
+            raise WetclutchError(f"{where} has no key 'name' (the channel's name in the file)")
+        bad = next((k for k in MAP_KEYS if k in entry and not isinstance(entry[k], str)), None)
+        if bad is not None:
+            raise WetclutchError(f"{where}.{bad} must be a string (got {entry[bad]!r})")
+        if not entry["name"].strip():
+            raise WetclutchError(f"{where}.name must not be empty")
         if "unit" in entry:
             _conversion(entry["unit"], key, f"channel map '{path}'")
         out[key] = entry
+    # a channel not in the map keeps its own name: two channels must not read one column
+    reads: dict[str, str] = {}
+    for ch in CHANNELS:
+        name = out.get(ch, {}).get("name", ch)
+        if name in reads:
+            first, second = sorted((reads[name], ch), key=lambda c: c not in out)
+            raise WetclutchError(f"channel map '{path}': '{first}' and '{second}' both read column '{name}'"
+                                 + (f" ('{second}', not in the map, reads the column of its own name)"
+                                    if second not in out else ""))
+        reads[name] = ch
     return out
 
 
@@ -217,7 +273,8 @@ def _check(data: dict[str, np.ndarray], fail: Any) -> None:
         if bad.any():
             i = int(np.argmax(bad))
             where = f"sample {i}" if ch == "time" or not np.isfinite(t[i]) else f"t = {t[i]:.6g} s"
-            raise fail(f"channel '{ch}' has {int(bad.sum())} non-finite samples (NaN run from {where})")
+            k = int(bad.sum())
+            raise fail(f"channel '{ch}' has {k} non-finite sample{'' if k == 1 else 's'} (NaN run from {where})")
     if n < 16:
         raise fail(f"channel 'time' has only {n} samples")
     steps = np.diff(t)

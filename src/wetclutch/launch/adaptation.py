@@ -38,6 +38,8 @@ BAND_C = 20.0
 #: the fields of a band in the file (``to_C`` is written for the reader; the band is known by ``from_C``)
 BAND_FIELDS = ("from_C", "to_C", "kiss_Pa", "launches", "friction_factor", "friction_slope_per_rad_s",
                "hold_margin_Pa")
+#: the fields :meth:`Adaptation.to_toml` writes for every band (the others only where something was learnt)
+BAND_REQUIRED = BAND_FIELDS[:4]
 #: weight of a new finding against what was learnt (exponential forgetting: drift is followed, noise averaged)
 GAIN = 0.5
 #: a launch whose standby creep exceeded the design's ``creep_limit`` (the plates' part of it, not the open plates' drag
@@ -50,6 +52,15 @@ MARGIN_MAX = 0.1e5
 def band(temp_C: float) -> int:
     """The band of oil temperature ``temp_C``: bands of :data:`BAND_C` from the lowest allowed temperature."""
     return int((temp_C - OIL_TEMP_RANGE_C[0]) // BAND_C)
+
+
+def band_from(b: int) -> float:
+    """The lowest temperature (C) of band ``b``, the file's ``from_C``."""
+    return OIL_TEMP_RANGE_C[0] + b * BAND_C
+
+
+#: the bands of the allowed oil temperatures (the highest allowed temperature opens the last)
+BANDS = range(band(OIL_TEMP_RANGE_C[0]), band(OIL_TEMP_RANGE_C[1]) + 1)
 
 
 #: the friction factor a learnt value may take: what the controller's estimate may
@@ -106,7 +117,7 @@ class Adaptation:
                           self.inertia if inertia is None else _blend(self.inertia, inertia), margin)
 
     def to_toml(self) -> str:
-        bands = [{"from_C": OIL_TEMP_RANGE_C[0] + b * BAND_C, "to_C": OIL_TEMP_RANGE_C[0] + (b + 1) * BAND_C,
+        bands = [{"from_C": band_from(b), "to_C": band_from(b + 1),
                   "kiss_Pa": v, "launches": self.launches.get(b, 0)}
                  | ({"friction_factor": self.friction[b]} if b in self.friction else {})
                  | ({"friction_slope_per_rad_s": self.slope[b]} if b in self.slope else {})
@@ -145,15 +156,27 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
         unknown = sorted(set(row) - set(BAND_FIELDS))
         if unknown:
             raise WetclutchError(f"{where}.{unknown[0]}: unknown field")
-        lo, v, n = row.get("from_C"), row.get("kiss_Pa"), row.get("launches", 1)
-        for key, x in (("from_C", lo), ("kiss_Pa", v)):
+        # a band the writer wrote has all of these: one without is not a state this product saved
+        missing = next((key for key in BAND_REQUIRED if key not in row), None)
+        if missing is not None:
+            raise WetclutchError(f"{where}.{missing}: missing (every band has {', '.join(BAND_REQUIRED)})")
+        lo, hi, v, n = row["from_C"], row["to_C"], row["kiss_Pa"], row["launches"]
+        for key, x in (("from_C", lo), ("to_C", hi), ("kiss_Pa", v)):
             if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
                 raise WetclutchError(f"{where}.{key}: must be a finite number (got {x!r})")
+        b = band(lo)
+        # the state is kept by band: a temperature inside a band would be taken for the whole band
+        if b not in BANDS or lo != band_from(b):
+            raise WetclutchError(f"{where}.from_C: {lo:g} C is not the lower edge of a band "
+                                 f"({', '.join(f'{band_from(k):g}' for k in BANDS)} C)")
+        if hi != band_from(b + 1):
+            raise WetclutchError(f"{where}.to_C: must be from_C + band_C = {band_from(b + 1):g} C (got {hi:g})")
+        if b in kiss:
+            raise WetclutchError(f"{where}: band {lo:g}..{hi:g} C is given twice (band[{list(kiss).index(b)}] before)")
         if not 0.0 <= v <= 5e6:
             raise WetclutchError(f"{where}.kiss_Pa: {v:g} Pa is outside 0..5e6")
-        if not isinstance(n, int) or n < 0:
+        if isinstance(n, bool) or not isinstance(n, int) or n < 0:
             raise WetclutchError(f"{where}.launches: must be a whole number >= 0 (got {n!r})")
-        b = band(lo + 0.5 * BAND_C)
         kiss[b], count[b] = float(v), n
         learnable = (("friction_factor", fric, FRICTION_RANGE),
                      ("friction_slope_per_rad_s", slopes, (-FRICTION_SLOPE_MAX, FRICTION_SLOPE_MAX)),

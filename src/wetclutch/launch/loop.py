@@ -143,6 +143,12 @@ def _closed_loop(net, ext, ws, u_slot, probe, temp, sensors, noise, ctrl, cs, ho
     return OK, n
 
 
+#: the requested axle torque a launch takes, N m (above the lower end, up to the upper end)
+T_REF_RANGE_NM = (0.0, 1000.0)
+#: the factor on the sensors' noise a launch takes (both ends included)
+NOISE_SCALE_RANGE = (0.0, 10.0)
+
+
 @dataclass(frozen=True)
 class Conditions:
     """One launch: the request and the conditions it meets.
@@ -181,16 +187,18 @@ class Conditions:
     rtol: float = RTOL
 
     def checked(self) -> Conditions:
-        if not 0.0 < self.t_ref <= 1000.0:
-            raise WetclutchError(f"--t-ref must be in (0, 1000] N m (got {self.t_ref:g})")
+        lo, hi = T_REF_RANGE_NM
+        if not lo < self.t_ref <= hi:
+            raise WetclutchError(f"--t-ref must be in ({lo:g}, {hi:g}] N m (got {self.t_ref:g})")
         if self.oil_temp_C is not None:
             check_oil_temp(self.oil_temp_C, "--oil-temp")
         if self.profile not in PROFILES and not Path(self.profile).is_file():
             raise WetclutchError(f"--profile must be step, ramp or an existing CSV file (got '{self.profile}')")
         if self.seed < 0:
             raise WetclutchError(f"--seed must be >= 0 (got {self.seed})")
-        if not 0.0 <= self.noise_scale <= 10.0:
-            raise WetclutchError(f"--noise-scale must be in 0..10 (got {self.noise_scale:g})")
+        lo, hi = NOISE_SCALE_RANGE
+        if not lo <= self.noise_scale <= hi:
+            raise WetclutchError(f"--noise-scale must be in {lo:g}..{hi:g} (got {self.noise_scale:g})")
         if not 1e-4 <= self.dt <= 1e-2:
             raise WetclutchError(f"controller sample time must be in 0.1..10 ms (got {self.dt * 1e3:g} ms)")
         if not self.t_request + 0.5 < self.t_max <= 120.0:

@@ -10,6 +10,9 @@ path of :class:`~wetclutch.params.Params`) or one launch condition (:data:`CONDI
   minus and plus two standard deviations (truncated there);
 * ``corner = true``: the corner cases take this range's extremes.
 
+A condition's range must lie within what a launch takes (:func:`condition_error`): every value drawn lies
+between ``low`` and ``high``, so a file whose ends lie within can draw nothing else.
+
 :func:`load` validates a file (one-line errors naming the range and key); :func:`fit`
 limits the ranges to what a plant can physically take; :func:`draw` and :func:`corners`
 turn ranges into values; :func:`apply` puts values into a plant.
@@ -26,8 +29,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import WetclutchError, read_text
-from ..params import Params, load as load_params
+from ..errors import ParameterError, WetclutchError, read_text
+from ..params import Params, check_oil_temp, load as load_params
+from .loop import NOISE_SCALE_RANGE, T_REF_RANGE_NM
 
 DEFAULT_FILE = Path(__file__).resolve().parent / "data" / "ranges.toml"
 #: launch conditions a range may vary (the rest of a range's targets are parameters)
@@ -72,6 +76,34 @@ class Range:
         if self.how == "offset":
             return base + x
         return x
+
+
+def condition_error(target: str, x: float) -> str | None:
+    """Why a launch cannot take the value ``x`` of condition ``target``.
+
+    Parameters
+    ----------
+    target : str
+        One of :data:`CONDITIONS`.
+    x : float
+        The condition's value (oil temperature in C, request in N m, noise factor).
+
+    Returns
+    -------
+    str or None
+        One sentence naming the condition and its limits, or None if a launch takes ``x``.
+    """
+    if target == "oil_temp_C":
+        try:
+            check_oil_temp(x, "oil_temp_C")
+        except ParameterError as e:
+            return str(e)
+        return None
+    if target == "t_ref":
+        lo, hi = T_REF_RANGE_NM
+        return None if lo < x <= hi else f"t_ref must be in ({lo:g}, {hi:g}] N m (got {x:g})"
+    lo, hi = NOISE_SCALE_RANGE
+    return None if lo <= x <= hi else f"noise_scale must be in {lo:g}..{hi:g} (got {x:g})"
 
 
 def _err(where: str, msg: str) -> RangesError:
@@ -120,6 +152,12 @@ def parse(data: dict[str, Any], source: str = "ranges") -> list[Range]:
         low, high = _number(where, raw, "low"), _number(where, raw, "high")
         if not low <= high:
             raise _err(f"{where}.low", f"must not exceed high ({low:g} > {high:g})")
+        if target in CONDITIONS:
+            # a condition is absolute and every draw (a normal one clipped) lies between the ends, and each
+            # condition's allowed values form one interval: the ends decide
+            for key, end in (("low", low), ("high", high)):
+                if (why := condition_error(target, end)) is not None:
+                    raise _err(f"{where}.{key}", why)
         corner = raw.get("corner", False)
         if not isinstance(corner, bool):
             raise _err(f"{where}.corner", f"must be true or false (got {corner!r})")
@@ -191,7 +229,10 @@ def apply(ranges: list[Range], values: dict[str, float], plant: Params) -> tuple
 
 
 def _error(r: Range, x: float, plant: Params) -> WetclutchError | None:
-    """Why ``r`` at ``x`` leaves ``plant``'s physical range (None: it does not)."""
+    """Why ``r`` at ``x`` leaves ``plant``'s physical range, or a condition what a launch takes (None: it does not)."""
+    if r.is_condition:
+        why = condition_error(r.target, r.value(0.0, x))
+        return None if why is None else RangesError(why)
     try:
         apply([r], {r.name: x}, plant)
     except WetclutchError as e:
@@ -213,17 +254,19 @@ def fit(ranges: list[Range], plant: Params) -> tuple[list[Range], list[str]]:
     a parameter out of its physical range is limited to the part within it (a prestress 0.3 bar low on a clutch
     whose prestress is 0.2 bar stops at zero), found by bisection to a millionth of the range; returns the ranges
     and one sentence per limited range. Refuses (one line naming the range) an absolute range with an end out of
-    the physical range, and a range with no value within it."""
+    the physical range (a condition's: out of what a launch takes, :func:`condition_error`), and a range with no
+    value within it."""
     out, notes = [], []
     for r in ranges:
-        errors = [None if r.is_condition else _error(r, end, plant) for end in (r.low, r.high)]
+        errors = [_error(r, end, plant) for end in (r.low, r.high)]
         if errors == [None, None]:
             out.append(r)
             continue
         inside = 1.0 if r.how == "rel" else 0.0  # the plant's own value
         if r.how == "abs" or not r.low <= inside <= r.high:
             bad, e = next((end, e) for end, e in zip((r.low, r.high), errors) if e is not None)
-            raise RangesError(f"range [{r.name}] at {bad:g} leaves the plant's physical range: {e}")
+            what = "is outside what a launch takes" if r.is_condition else "leaves the plant's physical range"
+            raise RangesError(f"range [{r.name}] at {bad:g} {what}: {e}")
         low, high = (end if e is None else _edge(r, inside, end, plant) for end, e in zip((r.low, r.high), errors))
         out.append(replace(r, low=low, high=high))
         notes.append(f"{r.name} ({r.target}, {r.how}) limited from {r.low:g}..{r.high:g} to {low:g}..{high:g} "
