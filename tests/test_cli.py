@@ -59,6 +59,14 @@ def test_coupled_clutches_columns(tmp_path):
         (["--set", "driveline.eta=1.5"], "driveline.eta"),
         (["--set", "driveline.eta"], "expected PATH=VALUE"),
         (["--t-end", "-1"], "--t-end"),
+        (["--t-end", "inf"], "--t-end must be in (0, 600] s"),
+        (["--t-end", "1e9"], "--t-end must be in (0, 600] s"),
+        (["--t-end", "nan"], "--t-end"),
+        (["--dt-out", "0"], "--dt-out"),
+        (["--dt-out", "100"], "--dt-out"),
+        (["--dt-out", "-0.001"], "--dt-out"),
+        (["--dt-out", "nan"], "--dt-out"),
+        (["--t-end", "600", "--dt-out", "1e-9"], "at most 1000000 samples"),
         (["--frobnicate"], "unrecognized arguments"),
     ],
 )
@@ -137,6 +145,8 @@ def test_launch_writes_signals_summary_plot(tmp_path):
         (["tune", "--generations", "0"], "--generations"),
         (["tune", "--heldout-seed", "0"], "--heldout-seed"),
         (["rig", "step", "--seed", "-1"], "--seed"),
+        (["launch", "--controller", "baseline", "--adaptation", "a.toml"], "--adaptation: the baseline controller"),
+        (["launch", "--hold-time", "2"], "--hold-time needs --post-sync-hold"),
     ],
 )
 def test_launch_and_verify_bad_input(tmp_path, cli_refuses, args, fragment):
@@ -194,3 +204,122 @@ def test_design_writes_loadable_controller_files_and_their_account(tmp_path, cli
     ranges = tmp_path / "r.toml"
     ranges.write_text("[x]\ntarget = 'driveline.warp'\nlow = 0\nhigh = 1\n")
     cli_refuses(["verify", "--ranges", str(ranges)], "[x].target", tmp_path / "never3")
+
+
+def test_simulate_accepts_the_longest_output_interval(tmp_path):
+    # the limits themselves are allowed: one interval over the whole run, two samples
+    out = tmp_path / "o"
+    assert main(["simulate", "coupled-clutches", "--t-end", "0.5", "--dt-out", "0.5", "--out", str(out)]) == 0
+    assert len(pd.read_csv(out / "signals.csv")) == 2
+
+
+def test_params_export_into_a_missing_directory_is_a_one_line_error(tmp_path, capsys):
+    target = tmp_path / "nodir" / "x.toml"
+    assert main(["params", "export", str(target)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"directory '{target.parent}' does not exist" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("args", "out", "fragment"),
+    [
+        (["design"], "", "--out must not be empty"),
+        (["design"], ".", "--out '.' is or contains the current directory"),
+        (["simulate", "engage"], "..", "--out '..' is or contains the current directory"),
+        (["verify", "--samples", "1"], "./", "is or contains the current directory"),
+        (["export-fmu"], "", "--out must not be empty"),
+    ],
+)
+def test_out_that_cannot_be_replaced_is_refused_before_any_work(tmp_path, args, out, fragment):
+    cwd = tmp_path / "work"
+    cwd.mkdir()
+    (cwd / "keep").write_text("mine")
+    r = subprocess.run([sys.executable, "-m", "wetclutch", *args, "--out", out], capture_output=True, text=True,
+                       cwd=cwd, timeout=60)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and fragment in lines[0], r.stderr
+    # neither a temporary nor an .old directory, and the directory's content untouched
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["keep", "work"]
+
+
+def test_a_failed_swap_puts_the_previous_output_back_and_leaves_nothing_else(tmp_path, monkeypatch):
+    from wetclutch import output
+    from wetclutch.errors import WetclutchError
+
+    target = tmp_path / "out"
+    target.mkdir()
+    (target / "marker").write_text("old")
+    real = output.os.rename
+
+    def rename(src, dst):
+        if str(src).endswith(".tmp"):  # the new output's move into place fails (e.g. a busy mount point)
+            raise OSError(16, "Device or resource busy")
+        real(src, dst)
+
+    monkeypatch.setattr(output.os, "rename", rename)
+    with pytest.raises(WetclutchError, match="cannot write output .*busy"):
+        with output.atomic_dir(target) as d:
+            (d / "new.csv").write_text("time\n")
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+    assert [p.name for p in target.iterdir()] == ["marker"]
+
+
+def test_options_that_would_be_ignored_are_refused(tmp_path, cli_refuses):
+    cli_refuses(["export-fmu", "--pwm", "--controller", "launch"], "--pwm", tmp_path / "c.fmu")
+    cli_refuses(["export-fmu", "--pwm", "--controller-file", "c.toml"], "--pwm", tmp_path / "c.fmu")
+    cli_refuses(["export-fmu", "--dt", "0.002"], "--dt", tmp_path / "p.fmu")
+    # a controller file of the baseline: its kind shows only once it is read
+    design = tmp_path / "design"
+    assert main(["design", "--controller", "baseline", "--out", str(design)]) == 0
+    (tmp_path / "a.toml").write_text("")
+    cli_refuses(["launch", "--controller-file", str(design / "controller.toml"), "--adaptation",
+                 str(tmp_path / "a.toml")], "--adaptation: the baseline controller", tmp_path / "never")
+
+
+@pytest.mark.parametrize(("env", "option", "named"),
+                         [({}, ["--scheduler", "garbage"], "--scheduler"),
+                          ({"DASK_SCHEDULER_ADDRESS": "garbage"}, [], "DASK_SCHEDULER_ADDRESS")])
+def test_malformed_scheduler_address_is_one_line_naming_its_source(tmp_path, cli_refuses, monkeypatch, env, option,
+                                                                   named):
+    # the half-made client is closed at once: no finalizer's traceback follows the error line at exit
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
+    for k, v in env.items():
+        monkeypatch.setenv(k, v)
+    r = cli_refuses(["verify", "--samples", "1", "--quiet", *option], f"{named}: cannot reach a dask scheduler",
+                    tmp_path / "never")
+    assert "Traceback" not in r.stderr and "Exception ignored" not in r.stderr
+
+
+def test_help_texts(capsys):
+    def help_of(*cmd):
+        with pytest.raises(SystemExit):
+            main([*cmd, "--help"])
+        return " ".join(capsys.readouterr().out.split())
+
+    fmu = help_of("export-fmu")
+    assert "(default: the plant)" in fmu and "launch, default" not in fmu
+    rig = help_of("rig")
+    assert "--out DIR output directory" in rig and "(default clutch)" in rig
+    rep = help_of("report")
+    assert "(default 1000; plus corners)" in rep and "(default 200; plus corners)" in rep
+
+
+def test_counts_of_one_are_singular(tmp_path, capsys):
+    rig = tmp_path / "rig"
+    assert main(["rig", "step", "--t-end", "3", "--out", str(rig)]) == 0
+    assert main(["identify", str(rig / "measured.csv"), "--out", str(tmp_path / "id")]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    assert line.startswith("identify: 1 file, 1 onset, ") and " 0 frequency responses" in line
+
+
+def test_tune_resume_with_other_settings_is_refused_and_cma_says_nothing(tmp_path, cli_refuses):
+    state = tmp_path / "state.pkl"
+    small = ["--heldout-samples", "2", "--sequence", "1", "--workers", "2", "--quiet", "--state", str(state)]
+    # two generations of two: cma enlarges the second for its injected mean and would warn about it
+    r = run("tune", "--out", str(tmp_path / "t"), "--samples", "4", "--popsize", "2", "--generations", "2", *small)
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    cli_refuses(["tune", "--samples", "6", "--popsize", "3", "--generations", "3", *small],
+                "(--samples: 4 in the state, 6 now)", tmp_path / "never")
+    cli_refuses(["tune", "--samples", "4", "--popsize", "3", "--generations", "3", *small],
+                "(--popsize: 2 in the state, 3 now)", tmp_path / "never")

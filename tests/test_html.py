@@ -179,3 +179,24 @@ def test_hovering_a_verification_sample_shows_its_replay_command(reports, browse
     assert launch["replay"] in text
     assert f"#{launch['index']}" in text and ver["ranges"][0]["name"] in text, text
     page.context.close()
+
+
+def test_a_verification_page_carries_its_sequence_lockup_figures_and_sample_sets(tmp_path):
+    # a verification of 3 launches per clutch run to lock-up, written from a hand-made result (no browser needed):
+    # the page says how often each clutch was launched and the first launch's pass rate, tables the lock-up time
+    # and slip energy, and its percentile tables and histograms keep the random clutches and the corners apart
+    from test_report_text import verification
+
+    from wetclutch.launch import design as designs
+    from wetclutch.report import verify as verify_report
+
+    res = verification(sequence=3, lockup=True)
+    verify_report.write(res, tmp_path / "v", designs.cached(params.Params()))
+    page = (tmp_path / "v" / "verify.html").read_text()
+    assert "launched 3 times in a row" in page
+    assert f"On the first launch, before any adaptation, {100 * res['pass_rate_first_launch']:.1f} %" in page
+    assert "<td>lock-up time t_sync [s]</td>" in page and "<td>slip energy [J]</td>" in page
+    assert "Metrics over the 20 random clutches" in page and "Metrics over the 4 corners" in page
+    # the histograms' legends: both sets drawn
+    assert '"label":{"type":"value","value":"random"}' in page.replace(" ", "")
+    assert '"label":{"type":"value","value":"corners"}' in page.replace(" ", "")

@@ -1,5 +1,6 @@
 """Tuning: the tail score on results with known answers, a small search, stop and resume."""
 
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -208,3 +209,22 @@ def test_tune_command_writes_the_finalists_and_keeps_the_design_unless_beaten(tm
                                            == pytest.approx({n: start.settings[n] for n in names}))
     assert info["pass_rates"]["training"]["tuned"] == fin[info["chosen"]]["training_pass_rate"]
     assert "(chosen)" in (out / "tune.md").read_text()
+
+
+def test_a_resume_with_other_scoring_settings_is_refused(tmp_path):
+    start = designs.cached(Params(), "baseline")
+    state = tmp_path / "state.pkl"
+    tune.run(start, Params(), SMALL, samples=2, seed=3, generations=2, popsize=2, workers=1, state=state)
+    for change, fragment in (({"samples": 3}, "--samples: 2 in the state, 3 now"),
+                             ({"popsize": 3}, "--popsize: 2 in the state, 3 now"),
+                             ({"seed": 4}, "--seed: 3 in the state, 4 now"),
+                             ({"sequence": 2}, "--sequence: 1 in the state, 2 now"),
+                             ({"ranges": SMALL[:1]}, "--ranges: ranges "),
+                             ({"plant": Params(driveline={"ratio": 0.55})}, "--param-file/--set: plant "),
+                             ({"generations": 1}, "--generations 1 is fewer than the 2 generations")):
+        kw = {"samples": 2, "seed": 3, "generations": 2, "popsize": 2, "ranges": SMALL, "plant": Params()} | change
+        with pytest.raises(WetclutchError, match=re.escape(fragment)):
+            tune.run(start, workers=1, state=state, **kw)
+    # the same settings resume, with more generations
+    more = tune.run(start, Params(), SMALL, samples=2, seed=3, generations=3, popsize=2, workers=1, state=state)
+    assert len(more.history) == 3

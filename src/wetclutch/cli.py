@@ -16,9 +16,17 @@ from typing import NoReturn
 
 from . import params as params_mod
 from .errors import WetclutchError
+from .output import check_target
 from .plant.scenarios import SCENARIOS, simulate
+from .report.text import plural
 
 EXIT_USAGE = 2
+#: the longest run of ``simulate`` (as the rig's), s
+MAX_T_END_S = 600.0
+#: the most output samples of ``simulate``: --t-end / --dt-out
+MAX_SAMPLES = 1_000_000
+#: the sample time of an exported controller, s
+DEFAULT_FMU_DT_S = 1e-3
 
 
 class _Parser(argparse.ArgumentParser):
@@ -55,13 +63,26 @@ def _load_params(args: argparse.Namespace) -> params_mod.Params:
     return params_mod.load(args.param_file, overrides)
 
 
+def _check_times(args: argparse.Namespace) -> tuple[float, float]:
+    """The run's end time and output interval (the scenario's defaults where not given); one line naming the option
+    if either is out of range or not a number."""
+    t_end = SCENARIOS[args.scenario].t_end if args.t_end is None else args.t_end
+    if not 0.0 < t_end <= MAX_T_END_S:
+        raise WetclutchError(f"--t-end must be in (0, {MAX_T_END_S:g}] s (got {t_end:g})")
+    dt_out = 1e-3 if args.dt_out is None else args.dt_out
+    shortest = t_end / MAX_SAMPLES
+    if not shortest <= dt_out <= t_end:
+        raise WetclutchError(f"--dt-out must be in [{shortest:g}, {t_end:g}] s for a run of {t_end:g} s, at most "
+                             f"{MAX_SAMPLES} samples (got {dt_out:g})")
+    return t_end, dt_out
+
+
 def _cmd_simulate(args: argparse.Namespace) -> None:
     from .report import scenario
 
+    t_end, dt_out = _check_times(args)
     p = _load_params(args)
-    if args.t_end is not None and not args.t_end > 0:
-        raise WetclutchError(f"--t-end must be > 0 (got {args.t_end})")
-    opts = {} if args.dt_out is None else {"dt_out": args.dt_out}
+    opts = {} if args.dt_out is None else {"dt_out": dt_out}
     res = simulate(args.scenario, p, args.t_end, **opts)
     scenario.write(res, args.out)
     s = res.summary
@@ -85,18 +106,28 @@ def _cmd_params_show(args: argparse.Namespace) -> None:
 def _cmd_params_export(args: argparse.Namespace) -> None:
     import os
     import tempfile
-    from pathlib import Path
 
+    if not args.file.strip():
+        raise WetclutchError("F.toml must not be empty")
     p = _load_params(args)
     target = Path(args.file)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent if str(target.parent) else ".")
+    parent = target.parent if str(target.parent) else Path(".")
+    if not parent.is_dir():
+        raise WetclutchError(f"cannot write '{target}': directory '{parent}' does not exist")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=parent)
+    except OSError as err:
+        raise WetclutchError(f"cannot write '{target}': {err.strerror or err}") from None
     try:
         with os.fdopen(fd, "w") as f:
             f.write(params_mod.to_toml(p))
         os.replace(tmp, target)
     except OSError as err:
         os.unlink(tmp)
-        raise WetclutchError(f"cannot write '{target}': {err.strerror}") from None
+        raise WetclutchError(f"cannot write '{target}': {err.strerror or err}") from None
+    except BaseException:
+        os.unlink(tmp)
+        raise
     print(f"wrote {target}")
 
 
@@ -126,10 +157,14 @@ def _cmd_calibration(args: argparse.Namespace) -> None:
     print(f"{sum(f.passed for f in figs)} of {len(figs)} figures within tolerance -> {args.out}/report.md")
 
 
-def _controller_args(p: argparse.ArgumentParser) -> None:
+def _out_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced as a whole)")
+
+
+def _controller_args(p: argparse.ArgumentParser,
+                     what: str = "controller kind: the design (launch, default) or the fair baseline") -> None:
     p.add_argument("--controller", choices=("launch", "baseline"),
-                   help="controller kind: the design (launch, default) or the fair baseline; designed on the plant "
-                        "unless --controller-file is given")
+                   help=f"{what}; designed on the plant unless --controller-file is given")
     p.add_argument("--controller-file", metavar="C.toml",
                    help="a controller file from 'wetclutch design' (designed on any plant)")
 
@@ -176,8 +211,14 @@ def _cmd_launch(args: argparse.Namespace) -> None:
     from .launch import loop as launch
     from .report import launch as launch_report
 
+    if args.hold_time is not None and not args.post_sync_hold:
+        raise WetclutchError("--hold-time needs --post-sync-hold (it limits that hold)")
+    if args.adaptation and args.controller == "baseline":
+        raise WetclutchError("--adaptation: the baseline controller has no adaptation")
     p, origin = _plant(args)
     d = _design(args, p, origin)
+    if args.adaptation and d.kind == "baseline":
+        raise WetclutchError(f"--adaptation: the baseline controller of '{args.controller_file}' has no adaptation")
     from .launch import adaptation
 
     cond = launch.Conditions(t_ref=args.t_ref, profile=args.profile, oil_temp_C=args.oil_temp, seed=args.seed,
@@ -225,7 +266,7 @@ def _cmd_verify(args: argparse.Namespace) -> None:
                      scheduler=args.scheduler, through_lockup=args.through_lockup)
     verify_report.write(res, args.out, d)
     seq = (f"; after {args.sequence} launches of each clutch (first launch {100 * res['pass_rate_first_launch']:.1f} %,"
-           f" {res['slams']} slams)" if args.sequence > 1 else "")
+           f" {plural(res['slams'], 'slam')})" if args.sequence > 1 else "")
     reach = res["pass_rate_reachable"]
     reach = "" if math.isnan(reach) else f"; {100 * reach:.1f} % of those some controller can pass"
     print(f"verify {d.kind}: all requirements in {verify_report.headline(res, _rates(res))}{reach}{seq} -> {args.out}")
@@ -249,10 +290,11 @@ def _cmd_report(args: argparse.Namespace) -> None:
                             progress=not args.quiet, replay_args=_replay_args(args, "controller.toml"),
                             baseline_replay_args=_replay_args(args, "baseline.toml"), scheduler=args.scheduler,
                             sequence=args.sequence, through_lockup=args.through_lockup)
-    s = report.write(job, args.out)
+    s = report.write(job, args.out, args.param_file, args.sets)
     same = s["same_samples"]
+    launches = "one launch each" if args.sequence == 1 else f"{args.sequence} launches each, judged on the last"
     print(f"report: launch controller meets all requirements in {verify_report.headline(job.verify)} "
-          f"({args.sequence} launches each, judged on the last); on the same {same['samples']}: design "
+          f"({launches}); on the same {plural(same['samples'], 'clutch', 'clutches')}: design "
           f"{100 * same['design']:.1f} %, baseline {100 * same['baseline']:.1f} % -> {args.out}/report.md")
 
 
@@ -319,21 +361,27 @@ def _cmd_identify(args: argparse.Namespace) -> None:
     e = res.estimates
     found = ", ".join(k for k in ("mu_slip_poly", "contact_pressure_Pa", "stroke_start_Pa", "valve_gain", "clutch_gain_poly_bar_per_V",
                                   "resonance_Hz", "ratio", "J_p", "J_1", "J_s") if k in e)
-    print(f"identify: {len(recs)} files, {len(res.onsets)} onsets, {len(res.steps)} step models, "
-          f"{len(res.responses)} frequency responses; {found or 'nothing'} -> {args.out}")
+    print(f"identify: {plural(len(recs), 'file')}, {plural(len(res.onsets), 'onset')}, "
+          f"{plural(len(res.steps), 'step model')}, {plural(len(res.responses), 'frequency response')}; "
+          f"{found or 'nothing'} -> {args.out}")
 
 
 def _cmd_export_fmu(args: argparse.Namespace) -> None:
     from .fmi import export
 
     if args.controller is None and args.controller_file is None:
+        if args.dt is not None:
+            raise WetclutchError("--dt is the sample time of a controller: give --controller or --controller-file")
         path = export.export_plant(_load_params(args), args.out, pwm=args.pwm)
         print(f"export-fmu: plant ({'PWM duty' if args.pwm else 'DC voltage'} input) -> {path}")
     else:
+        if args.pwm:
+            raise WetclutchError("--pwm is an input of the plant: leave out --controller and --controller-file")
         plant, origin = _plant(args)
         d = _design(args, plant, origin)
-        path = export.export_controller(d, args.out, args.dt)
-        print(f"export-fmu: {d.kind} controller, sampled every {args.dt * 1e3:g} ms -> {path}")
+        dt = DEFAULT_FMU_DT_S if args.dt is None else args.dt
+        path = export.export_controller(d, args.out, dt)
+        print(f"export-fmu: {d.kind} controller, sampled every {dt * 1e3:g} ms -> {path}")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -345,19 +393,21 @@ def build_parser() -> argparse.ArgumentParser:
     _param_args(sim)
     sim.add_argument("--t-end", type=float, metavar="S", help="end time, s (default: the scenario's)")
     sim.add_argument("--dt-out", type=float, metavar="S", help="output interval, s (default 0.001)")
-    sim.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced as a whole)")
+    _out_arg(sim)
     sim.set_defaults(func=_cmd_simulate)
 
     from .rig.experiments import EXPERIMENTS
 
     rg = sub.add_parser("rig", help="run an experiment on the virtual test rig and write measurement files")
     rg.add_argument("experiment", choices=EXPERIMENTS)
-    rg.add_argument("--out", required=True, metavar="DIR")
+    _out_arg(rg)
     rg.add_argument("--input-mode", choices=("dc", "pwm"), default="dc", help="DC voltage or PWM duty cycle input")
     rg.add_argument("--level", type=float, metavar="X", help="input level (V or duty; default 1 V / 0.2)")
     rg.add_argument("--from", dest="from_", type=float, metavar="X0", help="start level (default the lowest input)")
     rg.add_argument("--oil-temp", type=float, metavar="C", help="oil temperature, C (default rig.oil_temp_C)")
-    rg.add_argument("--config", choices=("clutch", "valve-only"), default="clutch")
+    rg.add_argument("--config", choices=("clutch", "valve-only"), default="clutch",
+                    help="rig configuration: the valve driving the clutch and driveline, or the valve alone on the "
+                         "test bench, flowing through a restriction (default clutch)")
     rg.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sampling rate (default 1000)")
     rg.add_argument("--seed", type=int, default=0, metavar="N", help="noise seed")
     rg.add_argument("--no-noise", action="store_true", help="ideal sensors: no noise, filters or quantisation")
@@ -366,19 +416,19 @@ def build_parser() -> argparse.ArgumentParser:
     rg.set_defaults(func=_cmd_rig)
 
     cal = sub.add_parser("calibration-report", help="compare the default rig with the study's figures")
-    cal.add_argument("--out", required=True, metavar="DIR")
+    _out_arg(cal)
     _param_args(cal)
     cal.set_defaults(func=_cmd_calibration)
 
     des = sub.add_parser("design", help="design the launch controller (and the fair baseline) for a plant: "
                                         "controller.toml, baseline.toml, design.md")
-    des.add_argument("--out", required=True, metavar="DIR")
+    _out_arg(des)
     des.add_argument("--controller", choices=("launch", "baseline"), help="design only this kind (default: both)")
     _param_args(des)
     des.set_defaults(func=_cmd_design)
 
     lau = sub.add_parser("launch", help="a controlled launch from standstill: signals.csv, summary.json, plot.png")
-    lau.add_argument("--out", required=True, metavar="DIR")
+    _out_arg(lau)
     _controller_args(lau)
     lau.add_argument("--t-ref", type=float, default=100.0, metavar="NM", help="requested axle torque T_r, N m (default 100)")
     lau.add_argument("--profile", default="step", metavar="step|ramp|FILE", help="request profile or CSV (time, t_ref)")
@@ -398,7 +448,7 @@ def build_parser() -> argparse.ArgumentParser:
     lau.set_defaults(func=_cmd_launch)
 
     ver = sub.add_parser("verify", help="Monte Carlo and corner-case verification of a launch controller")
-    ver.add_argument("--out", required=True, metavar="DIR")
+    _out_arg(ver)
     ver.add_argument("--samples", type=int, default=1000, metavar="N", help="random samples (default 1000; plus corners)")
     ver.add_argument("--seed", type=int, default=0, metavar="S")
     ver.add_argument("--workers", type=int, metavar="W", help="processes (default: all cores)")
@@ -414,9 +464,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     rep = sub.add_parser("report", help="the main job: design and baseline for the plant, nominal launches, "
                                         "verification of both, report.md")
-    rep.add_argument("--out", required=True, metavar="DIR")
-    rep.add_argument("--samples", type=int, default=1000, metavar="N")
-    rep.add_argument("--baseline-samples", type=int, default=200, metavar="N")
+    _out_arg(rep)
+    rep.add_argument("--samples", type=int, default=1000, metavar="N",
+                     help="random samples verifying the launch controller (default 1000; plus corners)")
+    rep.add_argument("--baseline-samples", type=int, default=200, metavar="N",
+                     help="random samples verifying the baseline (default 200; plus corners)")
     rep.add_argument("--seed", type=int, default=0, metavar="S")
     rep.add_argument("--workers", type=int, metavar="W")
     _scheduler_arg(rep)
@@ -432,7 +484,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     tun = sub.add_parser("tune", help="tune a controller's gains against the requirements (CMA-ES over training "
                                       "plants, verified on held-out ones): controller.toml, tune.md")
-    tun.add_argument("--out", required=True, metavar="DIR")
+    _out_arg(tun)
     tun.add_argument("--samples", type=int, default=40, metavar="N", help="training plants (default 40)")
     tun.add_argument("--seed", type=int, default=0, metavar="S", help="seed of the training plants")
     tun.add_argument("--heldout-samples", type=int, default=200, metavar="N", help="held-out plants (default 200)")
@@ -452,7 +504,7 @@ def build_parser() -> argparse.ArgumentParser:
     idf = sub.add_parser("identify", help="identify the clutch from measurement files; write identified.json, "
                                           "params.toml, report.md")
     idf.add_argument("files", nargs="+", metavar="FILE", help="measurement files (.csv, .mf4, .mat)")
-    idf.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced as a whole)")
+    _out_arg(idf)
     idf.add_argument("--channels", metavar="MAP.toml", help="channel map: names and units of the files' channels")
     idf.add_argument("--mu-order", type=int, default=2, metavar="N", help="order of the mu(slip) polynomial (default 2)")
     _param_args(idf)  # the prior: piston area, efficiency, inertias ... and the base of params.toml
@@ -460,9 +512,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     fmu = sub.add_parser("export-fmu", help="write an FMI 2.0 co-simulation FMU of the plant or of a launch controller")
     fmu.add_argument("--out", required=True, metavar="F.fmu", help="the FMU file to write")
-    _controller_args(fmu)  # either of them: export that controller (default: export the plant)
+    _controller_args(fmu, "export this controller kind instead of the plant (default: the plant)")
     fmu.add_argument("--pwm", action="store_true", help="plant: the valve input is a PWM duty cycle (default DC volts)")
-    fmu.add_argument("--dt", type=float, default=1e-3, metavar="S", help="controller: sample time (default 0.001)")
+    fmu.add_argument("--dt", type=float, metavar="S",
+                     help=f"controller: sample time, s (default {DEFAULT_FMU_DT_S:g})")
     _param_args(fmu)
     fmu.set_defaults(func=_cmd_export_fmu)
 
@@ -481,6 +534,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
+        if getattr(args, "out", None) is not None:
+            # before any work: an output that cannot replace its target is refused at once
+            check_target(args.out)
         args.func(args)
     except WetclutchError as err:
         print(f"wetclutch: error: {err}", file=sys.stderr)

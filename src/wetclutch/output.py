@@ -16,6 +16,39 @@ import numpy as np
 from .errors import WetclutchError
 
 
+def check_target(target: str | Path, option: str = "--out") -> Path:
+    """``target`` as a path an output may replace, or a one-line error naming ``option``.
+
+    Replacing an output renames the old one away, which a directory that holds the
+    current working directory (or is it) cannot be; an empty path would name that
+    directory too.
+
+    Parameters
+    ----------
+    target
+        The output's path as given.
+    option
+        The option that gave it, named in the error.
+
+    Returns
+    -------
+    Path
+        ``target`` as a path.
+
+    Raises
+    ------
+    WetclutchError
+        ``target`` is empty, or is or contains the current working directory.
+    """
+    if not str(target).strip():
+        raise WetclutchError(f"{option} must not be empty")
+    path = Path(target)
+    resolved, cwd = path.resolve(), Path.cwd().resolve()
+    if resolved == cwd or resolved in cwd.parents:
+        raise WetclutchError(f"{option} '{target}' is or contains the current directory, which cannot be replaced")
+    return path
+
+
 @contextmanager
 def atomic_dir(target: str | Path) -> Iterator[Path]:
     """Yield a temporary directory that replaces ``target`` only if the block succeeds.
@@ -23,31 +56,56 @@ def atomic_dir(target: str | Path) -> Iterator[Path]:
     The temporary directory sits beside ``target`` (same file system), so the
     final step is a rename; on any error it is removed and ``target`` is left as
     it was.
+
+    Parameters
+    ----------
+    target
+        The output directory (see :func:`check_target`).
+
+    Yields
+    ------
+    Path
+        The temporary directory to write the output into.
+
+    Raises
+    ------
+    WetclutchError
+        ``target`` cannot be replaced, or the output cannot be written.
     """
-    target = Path(target)
+    target = check_target(target)
     parent = target.parent if str(target.parent) else Path(".")
     try:
         parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent))
     except OSError as err:
         raise WetclutchError(f"cannot create output directory '{target}': {err.strerror}") from None
+    old: Path | None = None
     try:
         yield tmp
         if target.is_file():
             raise WetclutchError(f"output path '{target}' is a file, not a directory")
-        old = None
         if target.exists():
             old = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".old", dir=parent))
             os.rename(target, old / "d")
-        os.rename(tmp, target)
+        try:
+            os.rename(tmp, target)
+        except OSError:
+            if old is not None and (old / "d").exists():
+                os.rename(old / "d", target)
+            raise
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
+            old = None
     except OSError as err:
         shutil.rmtree(tmp, ignore_errors=True)
         raise WetclutchError(f"cannot write output '{target}': {err.strerror or err}") from None
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+    finally:
+        # the previous output, if it could not be put back, stays rather than being lost
+        if old is not None and not (old / "d").exists():
+            shutil.rmtree(old, ignore_errors=True)
 
 
 def _jsonable(v: Any) -> Any:

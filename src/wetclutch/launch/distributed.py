@@ -14,6 +14,7 @@ The scheduler is the ``--scheduler`` option or, without it, the environment vari
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 from collections.abc import Callable, Sequence
@@ -49,16 +50,49 @@ def _apply(fn: Callable[[Any], Any], batch: list[Any]) -> list[Any]:
     return [fn(item) for item in batch]
 
 
-def connect(address: str) -> Any:
-    """A client of the scheduler at ``address``; a one-line error naming it if it cannot be reached."""
+def _source(address: str) -> str:
+    """What named ``address``: the environment variable if it holds it, else the option."""
+    return ENV_SCHEDULER if os.environ.get(ENV_SCHEDULER, "").strip() == address else "--scheduler"
+
+
+def connect(address: str, source: str | None = None) -> Any:
+    """A client of the scheduler at ``address``; a one-line error if it cannot be reached.
+
+    Parameters
+    ----------
+    address
+        The scheduler's address, e.g. ``tcp://10.0.0.5:8786``.
+    source
+        What gave the address, named in the error (default: :data:`ENV_SCHEDULER` if the
+        environment variable holds ``address``, else ``--scheduler``).
+
+    Returns
+    -------
+    distributed.Client
+        A connected client (not the default one); close it after use.
+
+    Raises
+    ------
+    WetclutchError
+        The address is malformed or no scheduler answers there within :data:`CONNECT_TIMEOUT_S`.
+    """
+    source = source or _source(address)
     try:
         from distributed import Client
     except ImportError as e:  # pragma: no cover - a dependency of the package
-        raise WetclutchError(f"--scheduler needs dask.distributed installed ({e})") from None
+        raise WetclutchError(f"{source} needs dask.distributed installed ({e})") from None
+    # made apart from its start, so that a client whose start fails can still be closed here: left to its
+    # finalizer, it waits for its event loop at exit and prints a traceback long after the error
+    client = Client.__new__(Client)
     try:
-        return Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as e:
-        raise WetclutchError(f"--scheduler: cannot reach a dask scheduler at {address!r} ({e})") from None
+        client.__init__(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
+    except BaseException as e:
+        with contextlib.suppress(Exception):
+            client.close(timeout=CONNECT_TIMEOUT_S)
+        if isinstance(e, (OSError, TimeoutError, ValueError)):
+            raise WetclutchError(f"{source}: cannot reach a dask scheduler at {address!r} ({e})") from None
+        raise
+    return client
 
 
 def map_batches(fn: Callable[[Any], Any], items: Sequence[Any], scheduler: str, warm: Callable[[], Any] | None = None,

@@ -35,9 +35,12 @@ run can be stopped and resumed.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import pickle
-from collections.abc import Callable
+import warnings
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -50,6 +53,7 @@ from ..params import Params
 from . import metrics, verify
 from .design import Design, with_settings
 from .ranges import Range
+from .ranges import load as load_ranges
 
 #: the gains each kind's tuning searches
 TUNABLE = {"launch": ("ki_t", "ki_rise", "kp_p", "ki_p", "kd_p", "tau_ref", "tau_theta"), "baseline": ("kp", "ki")}
@@ -102,6 +106,8 @@ class Tuning:
     #: each candidate against the start on the validation plants (:func:`against_start`)
     tests: dict[str, tuple[int, int, float]] = field(default_factory=dict)
     chosen: str = "start"
+    #: what the candidates' scores depend on besides the design (:func:`scoring`); a resumed search keeps them
+    settings: dict[str, Any] = field(default_factory=dict)
 
 
 def against_start(candidate: list[bool], start: list[bool]) -> tuple[int, int, float]:
@@ -126,6 +132,42 @@ def check_options(samples: int, generations: int, popsize: int) -> None:
         raise WetclutchError(f"--popsize must be >= 2 (got {popsize})")
 
 
+def scoring(samples: int, seed: int, popsize: int, sequence: int, plant: Params,
+            ranges: list[Range]) -> dict[str, Any]:
+    """What a search's scores depend on besides its start, each under the option that sets it.
+
+    Parameters
+    ----------
+    samples, seed, sequence
+        The training plants: their number, their seed and the launches of each.
+    popsize
+        Candidates per generation.
+    plant
+        The plant the ranges vary around.
+    ranges
+        What varies.
+
+    Returns
+    -------
+    dict
+        Option name to a printable value (plant and ranges as a short digest), comparable with ``==``.
+    """
+    def digest(v: Any) -> str:
+        return hashlib.sha256(repr(v).encode()).hexdigest()[:12]
+
+    return {"--samples": samples, "--seed": seed, "--popsize": popsize, "--sequence": sequence,
+            "--param-file/--set": f"plant {digest(plant.model_dump())}", "--ranges": f"ranges {digest(ranges)}"}
+
+
+@contextmanager
+def _quiet_cma() -> Iterator[None]:
+    """Hide the warnings of the ``cma`` calls inside (e.g. that it enlarges a small population): the search
+    reports through its result, and its remarks are no business of the command line's user."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        yield
+
+
 def _candidate(start: Design, names: tuple[str, ...], x: np.ndarray) -> Design:
     x = np.clip(x, -math.log(SPAN), math.log(SPAN))
     return with_settings(start, **{n: start.settings[n] * math.exp(v) for n, v in zip(names, x)})
@@ -140,7 +182,9 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
     ``sequence``: launches per training plant, the adaptation carried over, judged on the last (as ``verify``).
 
     ``state``: a file the search is saved to after each generation and resumed from if it
-    exists. ``on_generation(generation, best score, best pass rate)`` reports progress.
+    exists; a state of another start or other scoring settings (:func:`scoring`) is refused, and so is
+    ``generations`` below the generations it has run. ``on_generation(generation, best score, best pass rate)``
+    reports progress.
 
     The tuned design is the finalist (start, best on training, the search's mean) that scores best on
     :data:`VALIDATION_FACTOR` ``* samples`` validation plants drawn with ``seed + 1``; ``best_score``
@@ -153,6 +197,8 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
         raise WetclutchError(f"no tuning for controller '{start.kind}'")
     names = TUNABLE[start.kind]
     path = Path(state) if state is not None else None
+    settings = scoring(samples, seed, popsize, sequence, plant if plant is not None else start.plant,
+                       ranges if ranges is not None else load_ranges())
 
     def verified(design: Design, n: int, s: int) -> dict[str, Any]:
         return verify.run(design, plant, n, s, workers, ranges, corners=False, progress=False, sequence=sequence)
@@ -164,22 +210,34 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
             raise WetclutchError(f"cannot resume from '{path}': {type(e).__name__}") from None
         if tuning.start.key() != start.key():
             raise WetclutchError(f"'{path}' is the state of another tuning (other design); remove it to start anew")
+        saved = getattr(tuning, "settings", None) or {}
+        for option, value in settings.items():
+            if saved.get(option) != value:
+                was = saved.get(option, "not recorded")
+                raise WetclutchError(f"'{path}' is the state of another tuning ({option}: {was} in the state, "
+                                     f"{value} now); give the same options or remove it to start anew")
+        if len(tuning.history) > generations:
+            raise WetclutchError(f"--generations {generations} is fewer than the {len(tuning.history)} generations "
+                                 f"'{path}' has already run")
     else:
-        es = cma.CMAEvolutionStrategy(np.zeros(len(names)), 0.3,
-                                      {"popsize": popsize, "seed": seed + 1, "verbose": -9,
-                                       "bounds": [-math.log(SPAN), math.log(SPAN)]})
-        tuning = Tuning(start, start, names, best_x=np.zeros(len(names)))
+        with _quiet_cma():
+            es = cma.CMAEvolutionStrategy(np.zeros(len(names)), 0.3,
+                                          {"popsize": popsize, "seed": seed + 1, "verbose": -9,
+                                           "bounds": [-math.log(SPAN), math.log(SPAN)]})
+        tuning = Tuning(start, start, names, best_x=np.zeros(len(names)), settings=settings)
         first = verified(start, samples, seed)
         # the start is the candidate to beat: a search that finds nothing better keeps it
         tuning.start_training = tuning.best_score, tuning.best_rate = score(first), first["pass_rate"]
     while len(tuning.history) < generations:
-        xs = es.ask()
+        with _quiet_cma():
+            xs = es.ask()
         scores, rates = [], []
         for x in xs:
             res = verified(_candidate(start, names, np.asarray(x)), samples, seed)
             scores.append(score(res))
             rates.append(res["pass_rate"])
-        es.tell(xs, scores)
+        with _quiet_cma():
+            es.tell(xs, scores)
         i = int(np.argmin(scores))
         if scores[i] < tuning.best_score:
             tuning.best_score, tuning.best_rate = scores[i], rates[i]
@@ -192,7 +250,9 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
             tmp.replace(path)
         if on_generation is not None:
             on_generation(len(tuning.history), tuning.best_score, tuning.best_rate)
-    _choose(tuning, np.asarray(es.result.xfavorite, dtype=float), verified, samples, seed)
+    with _quiet_cma():
+        mean = np.asarray(es.result.xfavorite, dtype=float)
+    _choose(tuning, mean, verified, samples, seed)
     chosen = tuning.design
     if tuning.chosen == "start":
         return tuning

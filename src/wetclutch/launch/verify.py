@@ -319,14 +319,21 @@ def bins(results: list[dict[str, Any]], rs: list[ranges_mod.Range], n_bins: int 
     return out
 
 
+def percentiles(results: list[dict[str, Any]]) -> dict[str, dict[str, float]]:
+    """Per metric of :data:`METRICS`: the number ``n`` of ``results`` with a finite value, and their 5th, 50th, 95th
+    and 99th percentiles and largest value (only ``n`` where there is none)."""
+    out = {}
+    for k in METRICS:
+        v = np.array([r["metrics"].get(k) for r in results if r["metrics"].get(k) is not None], dtype=float)
+        v = v[np.isfinite(v)]
+        out[k] = {"n": int(v.size)} | ({f"p{q}": float(np.percentile(v, q)) for q in (5, 50, 95, 99)}
+                                       | {"max": float(v.max())} if v.size else {})
+    return out
+
+
 def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) -> dict[str, Any]:
     """Pass rates (overall, per requirement, per range bin), metric percentiles and the worst cases."""
     total = len(results)
-    pct = {}
-    for k in METRICS:
-        v = np.array([r["metrics"].get(k) if r["metrics"].get(k) is not None else np.nan for r in results], dtype=float)
-        v = v[np.isfinite(v)]
-        pct[k] = {f"p{q}": float(np.percentile(v, q)) for q in (5, 50, 95, 99)} | {"max": float(v.max())} if v.size else {}
 
     def badness(r: dict[str, Any]) -> float:
         m = r["metrics"]
@@ -383,7 +390,9 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         "oscillating": _above(random_rows, "oscillation_pct", metrics.REQ_RIPPLE_PCT),
         "rippling": _above(random_rows, "ripple_pct", metrics.REQ_RIPPLE_PCT),
         "bins": bins(results, ctx.ranges),
-        "percentiles": pct,
+        # over the random samples, as the pass rates; the corners' apart
+        "percentiles": percentiles(random_rows),
+        "percentiles_corners": percentiles(corner_rows),
         "worst": [{k: r[k] for k in ("index", "values", "metrics", "requirements", "replay")} for r in worst],
         "results": results,
     }

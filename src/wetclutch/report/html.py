@@ -211,16 +211,30 @@ def verify_plots(result: Mapping[str, Any], specs: MetricSpecs) -> LayoutDOM:
             + "".join(f"<tr><td>{k}</td><td>{v}</td></tr>" for k, v in rows)
             + '</table><div>replay:</div><code style="white-space: normal; word-break: break-all;">@replay</code></div>')
     figs = []
+    corner = np.asarray(src.data["corner"], dtype=bool)
     for key, label, limit in specs:
-        v = np.asarray(src.data[key], dtype=float)
-        v = v[np.isfinite(v)]
+        every = np.asarray(src.data[key], dtype=float)
+        ok = np.isfinite(every)
+        v = every[ok]
         f = figure(title=label, width=WIDTH // 2, height=220, x_axis_label=label, y_axis_label="launches",
                    tools="pan,wheel_zoom,box_zoom,reset,save")
         if v.size:
-            counts, edges = np.histogram(v, bins=min(40, max(5, v.size // 5)))
-            h = ColumnDataSource({"top": counts, "left": edges[:-1], "right": edges[1:]})
-            f.quad(top="top", bottom=0, left="left", right="right", source=h, fill_alpha=0.7)
-            f.add_tools(HoverTool(tooltips=[("range", "@left{0.0000} .. @right{0.0000}"), ("launches", "@top")]))
+            # the random samples and the corners stacked on common bins: the pass rates are the random samples',
+            # the corners a worst-case set beside them, and each is told apart by its colour
+            edges = np.histogram_bin_edges(v, bins=min(40, max(5, v.size // 5)))
+            bottom = np.zeros(edges.size - 1)
+            for name, mask, colour in (("random", ~corner, PALETTE[0]), ("corners", corner, PALETTE[1])):
+                counts, _ = np.histogram(every[ok & mask], bins=edges)
+                if not counts.any():
+                    continue
+                h = ColumnDataSource({"top": bottom + counts, "bottom": bottom.copy(), "count": counts,
+                                      "left": edges[:-1], "right": edges[1:]})
+                r = f.quad(top="top", bottom="bottom", left="left", right="right", source=h, fill_alpha=0.7,
+                           color=colour, legend_label=name)
+                f.add_tools(HoverTool(renderers=[r], tooltips=[("range", "@left{0.0000} .. @right{0.0000}"),
+                                                               (f"launches ({name})", "@count")]))
+                bottom = bottom + counts
+            f.legend.label_text_font_size = "8pt"
         if limit is not None:
             f.add_layout(Span(location=limit, dimension="height", line_color="#d62728", line_width=2))
             if v.size:  # keep the limit in view

@@ -17,6 +17,7 @@ from ..ident.result import PARAMS_FROM, Identification
 from ..output import atomic_dir, write_json
 from . import html
 from .plots import plt
+from .text import plural
 
 def write(result: Identification, out: str | Path) -> None:
     """Write ``identified.json``, ``params.toml``, ``report.md`` and the plots into ``out`` (replaced whole)."""
@@ -87,7 +88,7 @@ def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
     lines += ["", "## Identified values (± one standard error)", "", "| quantity | value | unit | from |", "|---|---|---|---|"]
     for name, est in e.items():
         files = sorted({s["file"] for s in est.sources})
-        lines.append(f"| {name} | {_pm(est.value, est.se)} | {est.unit} | {len(files)} file(s) |")
+        lines.append(f"| {name} | {_pm(est.value, est.se)} | {est.unit} | {plural(len(files), 'file')} |")
     if result.onsets:
         lines += ["", "### Dead time and contact pressure per run", "",
                   "| file | oil temp [C] | input | dead time [s] | stroke start [bar] | contact pressure [bar] |",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -9,10 +10,12 @@ from ..launch import metrics
 from ..launch.campaign import MainJob
 from ..launch.settings import to_toml
 from ..output import atomic_dir, write_json
+from ..params import Params
 from . import html
 from .design import design_md
 from .plots import plot_launch
-from .verify import _METRICS, REQUIREMENT_LABELS, bins_table, headline, plot_histograms, verify_table
+from .text import demote, plural, times
+from .verify import REQUIREMENT_LABELS, bins_table, headline, metric_specs, plot_histograms, verify_table
 
 
 def same_samples(ver: dict[str, Any], base: dict[str, Any]) -> dict[str, float]:
@@ -26,8 +29,26 @@ def same_samples(ver: dict[str, Any], base: dict[str, Any]) -> dict[str, float]:
             "baseline": sum(r["all_pass"] for r in theirs) / max(len(theirs), 1)}
 
 
-def write(job: MainJob, out: str | Path) -> dict[str, Any]:
-    """Write the main job's report into ``out`` (atomically); returns the content of ``summary.json``."""
+def write(job: MainJob, out: str | Path, plant_file: str | Path | None = None,
+          plant_changes: Sequence[str] = ()) -> dict[str, Any]:
+    """Write the main job's report into ``out`` (atomically).
+
+    Parameters
+    ----------
+    job
+        The main job's results.
+    out
+        The output directory.
+    plant_file
+        The parameter file the plant was read from (None: none given, or not known to the caller).
+    plant_changes
+        The ``--set`` changes made to it (``"path=value"``).
+
+    Returns
+    -------
+    dict
+        The content of ``summary.json``.
+    """
     launches, ver, base = job.launches, job.verify, job.verify_baseline
     keys = ("pass_rate", "pass_rate_interval", "pass_rate_per_requirement",
             "pass_rate_corners", "corners_passed", "corners", "pass_rate_all_cases", "cases", "samples", "percentiles")
@@ -46,33 +67,72 @@ def write(job: MainJob, out: str | Path) -> dict[str, Any]:
                    "same_samples": same_samples(ver, base), "baseline_margins": job.margins,
                    "launch_margins": job.launch_margins}
         write_json(d / "summary.json", summary)
-        md = _report_md(job, summary)
+        md = _report_md(job, summary, plant_md(job, plant_file, plant_changes))
         (d / "report.md").write_text(md)
-        html.write_main(d / "report.html", md, job, _METRICS)
+        html.write_main(d / "report.html", md, job, metric_specs(ver))
     return summary
 
 
+def _where(r: dict[str, Any]) -> str:
+    return ", ".join(f"{k} {v:g}" for k, v in r["corner"].items())
+
+
+def _unstable(r: dict[str, Any]) -> bool:
+    """Whether a corner's linearised closed loop is unstable: a gain margin below 1 (the loop gain already beyond the
+    critical one) or a phase margin below zero."""
+    return r["gain_margin"] < 1.0 or r["phase_margin_deg"] < 0.0
+
+
+def _shared(rows: list[dict[str, Any]]) -> str:
+    """What every one of ``rows`` has in common: the corner values they share (empty if none)."""
+    first = rows[0]["corner"]
+    common = {k: v for k, v in first.items() if all(r["corner"].get(k) == v for r in rows)}
+    return ", ".join(f"{k} {v:g}" for k, v in common.items())
+
+
+def _unstable_md(bad: list[dict[str, Any]], total: int) -> str:
+    """A sentence: at how many of ``total`` corners the linearised loop is unstable, what those share and the
+    smallest margins there."""
+    if not bad:
+        return ""
+    g = min(bad, key=lambda r: r["gain_margin"])
+    if len(bad) == 1:
+        where = f", at {_where(bad[0])}"
+    else:
+        common = _shared(bad)
+        where = f", all of them at {common}" if common else ""
+    return (f" At {len(bad)} of the {plural(total, 'corner')} the linearised loop is **unstable** (gain margin below 1 "
+            f"or phase margin below 0 deg){where}; the gain margin falls to {g['gain_margin']:.2f} there (at "
+            f"{_where(g)}).")
+
+
 def _margins_md(rows: list[dict[str, Any]]) -> str:
-    """Markdown: the smallest gain and phase margins of the baseline's PI loop over the corners, and where."""
+    """Markdown: the smallest gain and phase margins of the baseline's PI loop over the corners, and where; the
+    corners where the linearised loop is unstable; the conclusion that failures are nonlinear only where every
+    corner's loop is stable."""
     if not rows:
         return "(no corner ranges)"
     g = min(rows, key=lambda r: r["gain_margin"])
     p = min(rows, key=lambda r: r["phase_margin_deg"])
-    where = lambda r: ", ".join(f"{k} {v:g}" for k, v in r["corner"].items())  # noqa: E731
-    return ("The linearised loop (`wetclutch.launch.margins`: a first-order-plus-dead-time fit of the axle torque "
-            "per volt on each corner plant through the design's map, the PI, a third-order Pade dead time) keeps a "
-            f"gain margin of at least **{g['gain_margin']:.2f}** (at {where(g)}) and a phase margin of at least "
-            f"**{p['phase_margin_deg']:.0f} deg** (at {where(p)}) over the {len(rows)} corners. What fails in the "
-            "verification therefore fails in the nonlinear parts the linear loop leaves out (fill, kiss point, "
-            "valve play), not by instability of the torque loop.")
+    bad = [r for r in rows if _unstable(r)]
+    text = ("The linearised loop (`wetclutch.launch.margins`: a first-order-plus-dead-time fit of the axle torque "
+            "per volt on each corner plant through the design's map, the PI, a third-order Pade dead time) has its "
+            f"smallest gain margin, **{g['gain_margin']:.2f}**, at {_where(g)} and its smallest phase margin, "
+            f"**{p['phase_margin_deg']:.0f} deg**, at {_where(p)}, over the {plural(len(rows), 'corner')}.")
+    if bad:
+        return (text + _unstable_md(bad, len(rows)) + " Failures of the verification there may be the torque loop's "
+                "instability, not only the nonlinear parts the linear loop leaves out (fill, kiss point, valve play).")
+    return (text + " The loop is stable at every corner: what fails in the verification therefore fails in the "
+            "nonlinear parts the linear loop leaves out (fill, kiss point, valve play), not by instability of the "
+            "torque loop.")
 
 
 def _launch_margins_md(rows: list[dict[str, Any]]) -> str:
-    """Markdown: the launch controller's loop margins over the loop's corners, the smallest and where, and the
-    corners whose driveline is unstable by itself (friction falling with slip: judder no pressure loop damps)."""
+    """Markdown: the launch controller's loop margins over the loop's corners, the smallest and where, the corners
+    whose linearised loop is unstable, and the corners whose driveline is unstable by itself (friction falling with
+    slip: judder no pressure loop damps)."""
     if not rows:
         return "(no corner ranges)"
-    where = lambda r: ", ".join(f"{k} {v:g}" for k, v in r["corner"].items())  # noqa: E731
     judder = [r for r in rows if r["damping"] <= 0.0]
     stable = [r for r in rows if r["damping"] > 0.0]
     text = ("The torque loop of the launch controller linearised about the launch's start (`wetclutch.launch.margins`: "
@@ -82,14 +142,21 @@ def _launch_margins_md(rows: list[dict[str, Any]]) -> str:
     if stable:
         g = min(stable, key=lambda r: r["gain_margin"])
         p = min(stable, key=lambda r: r["phase_margin_deg"])
-        text += (f" keeps a gain margin of at least **{g['gain_margin']:.2f}** (at {where(g)}; resonance "
-                 f"{g['resonance_hz']:.1f} Hz, damping ratio {g['damping']:.2f}) and a phase margin of at least "
-                 f"**{p['phase_margin_deg']:.0f} deg** (at {where(p)}) over {len(stable)} of the {len(rows)} corners.")
+        bad = [r for r in stable if _unstable(r)]
+        text += (f", over the {plural(len(stable), 'corner')} of the {len(rows)} whose driveline is damped, has its "
+                 f"smallest gain margin, **{g['gain_margin']:.2f}**, at {_where(g)} (resonance "
+                 f"{g['resonance_hz']:.1f} Hz, damping ratio {g['damping']:.2f}) and its smallest phase margin, "
+                 f"**{p['phase_margin_deg']:.0f} deg**, at {_where(p)}.")
+        text += (_unstable_md(bad, len(rows)) if bad else
+                 f" The loop is stable at every one of these {plural(len(stable), 'corner')}.")
+    else:
+        text += " has no corner whose driveline is damped."
     if judder:
         w = min(judder, key=lambda r: r["damping"])
-        text += (f" At {len(judder)} corners the driveline is unstable by itself: friction falling with slip outweighs "
-                 f"the axle damping (damping ratio down to {w['damping']:.2f}, at {where(w)}); there the launch "
-                 "judders whatever the torque loop does, until the slip has fallen below the friction curve's peak.")
+        text += (f" At {plural(len(judder), 'corner')} the driveline is unstable by itself: friction falling with slip "
+                 f"outweighs the axle damping (damping ratio down to {w['damping']:.2f}, at {_where(w)}); there the "
+                 "launch judders whatever the torque loop does, until the slip has fallen below the friction curve's "
+                 "peak.")
     return text
 
 
@@ -97,7 +164,58 @@ def _fmt(v: Any, f: str) -> str:
     return "-" if v is None else format(v, f)
 
 
-def _report_md(job: MainJob, summary: dict[str, Any]) -> str:
+def plant_md(job: MainJob, plant_file: str | Path | None, changes: Sequence[str] = ()) -> str:
+    """Markdown, one paragraph: the plant the report is about, and whether the controllers were designed on it.
+
+    Parameters
+    ----------
+    job
+        The main job (its plant and designs).
+    plant_file
+        The parameter file the plant was read from, if known.
+    changes
+        The ``--set`` changes made to it.
+
+    Returns
+    -------
+    str
+        The parameter file (and changes) named; without a file, whether the plant is the default one.
+    """
+    sets = f", with {', '.join(f'`{c}`' for c in changes)}" if changes else ""
+    if plant_file is not None:
+        what = f"the parameter file `{plant_file}`{sets}"
+    elif job.plant == Params() and not changes:
+        what = "the default parameters"
+    elif changes:
+        what = f"the default parameters{sets}"
+    else:
+        what = "a plant other than the defaults"
+    own = [name for name, d in (("launch", job.design), ("baseline", job.baseline)) if d.plant == job.plant]
+    other = [name for name, d in (("launch", job.design), ("baseline", job.baseline)) if d.plant != job.plant]
+    text = f"**Plant.** Launches and verifications run on {what}."
+    if own:
+        text += (f" The {' and '.join(own)} controller{'s were' if len(own) > 1 else ' was'} designed on it (its "
+                 "parameters: the `[plant]` section of "
+                 + " and ".join(f"`{'controller' if n == 'launch' else 'baseline'}.toml`" for n in own) + ").")
+    if other:
+        text += (f" The {' and '.join(other)} controller{'s were' if len(other) > 1 else ' was'} designed on another "
+                 "plant (the `[plant]` section of "
+                 + " and ".join(f"`{'controller' if n == 'launch' else 'baseline'}.toml`" for n in other) + ").")
+    return text
+
+
+def _first_launch_md(ver: dict[str, Any]) -> str:
+    """A sentence: the pass rate of a sequence's first launch, before any adaptation, and the launches that slammed."""
+    corners = [r for r in ver["results"] if r["corner"]]
+    text = (f"On the first launch of each clutch, before any adaptation, it meets them in "
+            f"{100 * ver['pass_rate_first_launch']:.1f} % of the random clutches")
+    if corners:
+        text += f" (corners {sum(bool(r['first_all_pass']) for r in corners)} of {len(corners)})"
+    launches = ver["sequence"] * len(ver["results"])
+    return text + f"; {ver['slams']} of all {launches} launches slammed (see below)."
+
+
+def _report_md(job: MainJob, summary: dict[str, Any], plant: str = "") -> str:
     ver, base, same = job.verify, job.verify_baseline, summary["same_samples"]
     ok = lambda b: "pass" if b else "**FAIL**"  # noqa: E731
     varied = ", ".join(f"{r['name']} ({r['low']:g}..{r['high']:g}{' x' if r['how'] == 'rel' else ''}"
@@ -106,18 +224,20 @@ def _report_md(job: MainJob, summary: dict[str, Any]) -> str:
     lines = [
         "# wetclutch: torque control of a launch from standstill",
         "",
+        *([plant, ""] if plant else []),
         "Requirements, on the measured axle torque `T_r`: " + "; ".join(REQUIREMENT_LABELS[k] for k in metrics.REQUIREMENTS)
         + ". The response time judged is the settled one (the last entry into the band above 95 % of the steady "
         "value before the steady window begins); the first crossing of 95 % is reported beside it. Metric "
         "definitions: `wetclutch.launch.metrics`.",
         "",
-        f"**Verdict.** Over clutches that vary around this one ({varied}), each launched "
-        f"{ver['sequence']} time(s) with the controller's adaptation carried over and judged on the last launch, the launch "
-        f"controller meets every requirement in **{headline(ver)}** (the corners: every combination of the corner "
-        f"ranges' extremes); {100 * ver['pass_rate_reachable']:.1f} % of the random clutches that some controller "
+        f"**Verdict.** Over clutches that vary around this one ({varied}), "
+        + (f"each launched {times(ver['sequence'])} with the controller's adaptation carried over and judged on the "
+           "last launch, " if ver["sequence"] > 1 else "each launched once, ")
+        + f"the launch controller meets every requirement in **{headline(ver)}** (the corners: every combination of "
+        f"the corner ranges' extremes); {100 * ver['pass_rate_reachable']:.1f} % of the random clutches that some controller "
         "can pass (without those whose request is beyond the clutch's capacity or whose open plates' drag alone "
-        "creeps beyond the limit). On the same "
-        f"{same['samples']} samples it meets them in {100 * same['design']:.1f} %, "
+        "creeps beyond the limit). " + (_first_launch_md(ver) + " " if ver["sequence"] > 1 else "") + "On the same "
+        f"{plural(same['samples'], 'sample')} it meets them in {100 * same['design']:.1f} %, "
         "the baseline (timed fill, "
         f"kiss-point hold, PI with anti-windup tuned by the SIMC rule on this plant) in {100 * same['baseline']:.1f} %.",
         "",
@@ -141,8 +261,8 @@ def _report_md(job: MainJob, summary: dict[str, Any]) -> str:
               "### Where it fails: pass rate per range bin", "", bins_table(ver), "",
               "![histograms](verify_launch.png)", "",
               "## Verification: baseline", "", verify_table(base), "", "![histograms](verify_baseline.png)", "",
-              "### Loop margins over the corner plants", "", "Launch controller: " + _launch_margins_md(job.launch_margins),
-              "", "Baseline: " + _margins_md(job.margins), "",
-              "## The designs", "", design_md(job.design), design_md(job.baseline),
+              "## Loop margins over the corner plants", "",
+              "Launch controller: " + _launch_margins_md(job.launch_margins), "", "Baseline: " + _margins_md(job.margins), "",
+              "## The designs", "", demote(design_md(job.design), 2), demote(design_md(job.baseline), 2),
               "The controllers are in `controller.toml` and `baseline.toml` (`wetclutch launch --controller-file`).", ""]
     return "\n".join(lines)

@@ -8,6 +8,7 @@ from typing import Any
 from ..launch.settings import to_toml
 from ..launch.tune import SIGNIFICANCE, VALIDATION_FACTOR, Tuning
 from ..output import atomic_dir, write_json
+from .text import plural, times
 
 
 def write(tuning: Tuning, rates: dict[str, dict[str, float]], out: str | Path, meta: dict[str, Any]) -> None:
@@ -24,8 +25,8 @@ def write(tuning: Tuning, rates: dict[str, dict[str, float]], out: str | Path, m
                                                    | _test(t, k) for k, v in t.finalists.items()}, **meta})
         lines = [f"# Tuning of the {t.design.kind} controller", "",
                  f"CMA-ES over the logarithms of {', '.join(t.names)} (each within a factor 5 of the design), scored on "
-                 f"{meta['samples']} training plants (seed {meta['seed']}; each launched {meta.get('sequence', 1)} times, the "
-                 f"adaptation carried over, judged on the last) by (1 - pass rate) + 0.03 x the mean of the "
+                 f"{plural(meta['samples'], 'training plant')} (seed {meta['seed']}; "
+                 f"{_launched(meta.get('sequence', 1))}) by (1 - pass rate) + 0.03 x the mean of the "
                  f"worst 10 % of the samples' largest requirement violation. The tuned design is chosen among the "
                  f"finalists (the design, the best candidate on the training plants, the search's mean) on "
                  f"{VALIDATION_FACTOR * meta['samples']} validation plants (seed {meta['seed'] + 1}): the best of many "
@@ -47,6 +48,13 @@ def write(tuning: Tuning, rates: dict[str, dict[str, float]], out: str | Path, m
         lines += [f"| {h['generation']} | {h['best_score']:.3f} | {h['mean_score']:.3f} | {100 * h['best_pass_rate']:.1f} % |"
                   for h in t.history]
         (d / "tune.md").write_text("\n".join(lines) + "\n")
+
+
+def _launched(sequence: int) -> str:
+    """How each training plant was launched, and which launch is judged."""
+    if sequence <= 1:
+        return "each launched once"
+    return f"each launched {times(sequence)}, the adaptation carried over, judged on the last"
 
 
 def _test(t: Tuning, name: str) -> dict[str, float | int]:

@@ -14,6 +14,7 @@ from ..launch.settings import to_toml
 from ..output import atomic_dir, write_json
 from . import html
 from .plots import plt
+from .text import plural, times
 
 _METRICS = (("steady_state_error_pct", "steady-state error [%]", metrics.REQ_ESS_PCT),
             ("t95_settled_s", "t95, settled [s]", metrics.REQ_T95_S),
@@ -31,16 +32,51 @@ REQUIREMENT_LABELS = {
 }
 
 
+#: figures only a launch run to lock-up has (``--through-lockup``): shown when the run has them
+_LOCKUP_METRICS = (("t_sync_s", "lock-up time t_sync [s]", None),
+                   ("slip_energy_J", "slip energy [J]", None))
+_QUANTILES = ("p5", "p50", "p95", "p99", "max")
+
+
+def metric_specs(result: dict[str, Any]) -> tuple[tuple[str, str, float | None], ...]:
+    """The metrics a verification's report shows: ``(key, label, requirement limit or None)``.
+
+    Parameters
+    ----------
+    result
+        A verification (:func:`wetclutch.launch.verify.run`).
+
+    Returns
+    -------
+    tuple
+        The launch metrics, and the lock-up time and slip energy where any launch has them (a run to lock-up).
+    """
+    extra = tuple(spec for spec in _LOCKUP_METRICS
+                  if any(r["metrics"].get(spec[0]) is not None for r in result["results"]))
+    return _METRICS + extra
+
+
+def _values(rows: list[dict[str, Any]], key: str) -> np.ndarray:
+    """The finite values of metric ``key`` over ``rows`` (a launch without it, or that failed, has none)."""
+    v = np.array([r["metrics"].get(key) for r in rows if r["metrics"].get(key) is not None], dtype=float)
+    return v[np.isfinite(v)]
+
+
 def plot_histograms(result: dict[str, Any], path: Path) -> None:
-    """Histograms of the launch metrics over a verification run, with the requirement limits."""
-    fig, axes = plt.subplots(1, len(_METRICS), figsize=(15, 3.2))
-    for ax, (key, label, limit) in zip(axes, _METRICS):
-        v = np.array([r["metrics"].get(key) for r in result["results"] if r["metrics"].get(key) is not None], dtype=float)
-        v = v[np.isfinite(v)]
-        ax.hist(v, bins=40, color="tab:blue", alpha=0.8)
+    """Histograms of the launch metrics over a verification run, with the requirement limits: the random samples
+    and the corners stacked, each in its own colour."""
+    specs = metric_specs(result)
+    fig, axes = plt.subplots(1, len(specs), figsize=(2.5 * len(specs), 3.2))
+    parts = [(rows, lab, c) for rows, lab, c in ((_random(result), "random", "tab:blue"),
+                                                 (_corners(result), "corners", "tab:orange")) if rows]
+    for ax, (key, label, limit) in zip(axes, specs):
+        vs = [_values(rows, key) for rows, _, _ in parts]
+        if any(v.size for v in vs):
+            ax.hist(vs, bins=40, stacked=True, color=[c for _, _, c in parts], label=[lab for _, lab, _ in parts],
+                    alpha=0.8)
         if limit is not None:
             ax.axvline(limit, color="tab:red", lw=1.5, label="requirement")
-            ax.legend(fontsize=7)
+        ax.legend(fontsize=7)
         ax.set_xlabel(label, fontsize=9)
         ax.grid(True, alpha=0.3)
     axes[0].set_ylabel("launches")
@@ -54,6 +90,14 @@ def _pct(v: float | None) -> str:
     return "-" if v is None or v != v else f"{100 * v:.1f} %"
 
 
+def _random(result: dict[str, Any]) -> list[dict[str, Any]]:
+    return [r for r in result["results"] if not r["corner"]]
+
+
+def _corners(result: dict[str, Any]) -> list[dict[str, Any]]:
+    return [r for r in result["results"] if r["corner"]]
+
+
 def headline(result: dict[str, Any], detail: str = "") -> str:
     """One line: the pass rate of the random samples with its 95 % interval (and ``detail`` beside it), and the
     corners that pass."""
@@ -61,22 +105,103 @@ def headline(result: dict[str, Any], detail: str = "") -> str:
     ci = result.get("pass_rate_interval")
     inside = [f"95 % interval {100 * ci[0]:.1f}-{100 * ci[1]:.1f} %"] if n and ci is not None else []
     inside += [detail] if detail else []
-    text = f"{100 * result['pass_rate']:.1f} % of {n if n else k} {'random clutches' if n else 'corners'}"
+    what = plural(n, "random clutch", "random clutches") if n else plural(k, "corner")
+    text = f"{100 * result['pass_rate']:.1f} % of {what}"
     text += f" ({'; '.join(inside)})" if inside else ""
     if n and k:
         text += f"; corners {result['corners_passed']} of {k}"
     return text
 
 
+def sequence_md(result: dict[str, Any]) -> str:
+    """Markdown, one paragraph: how often each clutch was launched and which launch is judged, the first launch's
+    pass rate beside it (with a sequence), and the launches that slammed.
+
+    Parameters
+    ----------
+    result
+        A verification (:func:`wetclutch.launch.verify.run`).
+
+    Returns
+    -------
+    str
+        The paragraph.
+    """
+    seq = result.get("sequence", 1)
+    rand, corners = _random(result), _corners(result)
+    launches = seq * len(result["results"])
+    if seq > 1:
+        text = (f"Each clutch was launched {times(seq)} in a row, the controller's adaptation carried over from launch "
+                "to launch; the pass rates and metrics below are those of the last launch. On the first "
+                f"launch, before any adaptation, {_pct(result['pass_rate_first_launch'])} of the random clutches "
+                "met every requirement")
+        if corners:
+            first = sum(bool(r["first_all_pass"]) for r in corners)
+            text += f" (corners {first} of {len(corners)})"
+        text += f" against {_pct(result['pass_rate'])} on the last. "
+    else:
+        text = "Each clutch was launched once. "
+    slams = result["slams"]
+    text += (f"Launches that slammed (torque peak above {verify.SLAM_FACTOR:g} times the steady value, an overshoot "
+             f"above {100 * (verify.SLAM_FACTOR - 1):g} %): {slams} of the {launches}")
+    if slams and rand and corners:
+        text += (f" ({sum(r['slams'] for r in rand)} of the random clutches' launches, "
+                 f"{sum(r['slams'] for r in corners)} of the corners')")
+    return text + "."
+
+
+def _percentile_rows(pct: dict[str, dict[str, float]], specs: Any) -> list[str]:
+    """Table rows: each metric's launches with a value and its percentiles (``pct``, as the verification gives)."""
+    out = []
+    for key, label, _ in specs:
+        p = pct.get(key, {})
+        if p.get("n"):
+            out.append(f"| {label} | {p['n']} | " + " | ".join(f"{p[q]:.4g}" for q in _QUANTILES) + " |")
+        else:
+            out.append(f"| {label} | 0 | " + " | ".join("-" for _ in _QUANTILES) + " |")
+    return out
+
+
+def percentiles_md(result: dict[str, Any]) -> str:
+    """Markdown: the metric percentiles over the random samples (the population the pass rates estimate), and
+    those of the corners apart (the worst-case set beside it, no draw of the ranges).
+
+    Parameters
+    ----------
+    result
+        A verification (:func:`wetclutch.launch.verify.run`).
+
+    Returns
+    -------
+    str
+        One table per set of launches that the run holds, each saying what it is over.
+    """
+    specs = metric_specs(result)
+    head = ["| metric | launches with a value | p5 | p50 | p95 | p99 | max |", "|---|---|---|---|---|---|---|"]
+    lines: list[str] = []
+    for count, pct, what, why in (
+            (result["cases"] - result["corners"], result["percentiles"], ("random clutch", "random clutches"),
+             "the population the pass rates above estimate"),
+            (result["corners"], result["percentiles_corners"], ("corner", "corners"),
+             "every combination of the corner ranges' extremes, apart from the random clutches")):
+        if not count:
+            continue
+        lines += [f"Metrics over the {plural(count, *what)} ({why}):",
+                  "", *head, *_percentile_rows(pct, specs), ""]
+    return "\n".join(lines).rstrip("\n")
+
+
 def verify_table(result: dict[str, Any]) -> str:
-    """Markdown: pass rates, metric percentiles, worst cases."""
+    """Markdown: pass rates, the launches per clutch, metric percentiles (random samples and corners apart), worst
+    cases."""
     rate = result["pass_rate_per_requirement"]
-    lines = [f"**{result['controller']}**: {result['cases']} clutches ({result['samples']} random, "
-             f"{result['cases'] - result['samples']} corners), seed {result['seed']}; all requirements met in "
-             f"{headline(result)}. The pass rates below are the random samples' (an estimate of the share of the "
+    cases = plural(result['cases'], 'clutch', 'clutches')
+    lines = [f"**{result['controller']}**: {cases} ({result['samples']} random, "
+             f"{plural(result['cases'] - result['samples'], 'corner')}), seed {result['seed']}; all requirements met "
+             f"in {headline(result)}. The pass rates below are the random samples' (an estimate of the share of the "
              "ranges' clutches that pass); the corners, every combination of the corner ranges' extremes, are the "
              f"worst case beside them ({_pct(result['pass_rate_all_cases'])} of all cases together).",
-             "",
+             "", sequence_md(result), "",
              "| requirement | pass rate |", "|---|---|"]
     lines += [f"| {REQUIREMENT_LABELS[k]} | {_pct(rate.get(k))} |" for k in metrics.REQUIREMENTS]
     lines += [f"| **all** | **{_pct(result['pass_rate'])}** |", ""]
@@ -84,9 +209,12 @@ def verify_table(result: dict[str, Any]) -> str:
         lines += [f"Each launch ran to {result['horizon_s']:g} s after the request, past the window the requirements "
                   "judge, not to lock-up: lock-up times and slip energies are not part of this run "
                   "(`--through-lockup` runs each launch to lock-up; the verdicts are the same).", ""]
-    failed = sum(1 for r in result["results"] if not r["all_pass"])
+    failed = [r for r in result["results"] if not r["all_pass"]]
     if failed:
-        lines += [f"Of the {failed} launches that fail, {result['failures_unfilled']} had the plates touch only "
+        n_rand = sum(1 for r in failed if not r["corner"])
+        verb = "fails" if len(failed) == 1 else "fail"
+        lines += [f"Of the {plural(len(failed), 'launch', 'launches')} that {verb} ({n_rand} of the random clutches, "
+                  f"{len(failed) - n_rand} of the corners), {result['failures_unfilled']} had the plates touch only "
                   "after the request: the fill was not complete when torque was asked for, and the response time "
                   f"counts the rest of it ({result['failures_fill_too_slow']} of them would not have been filled in "
                   "time with the valve wide open from the start either: no controller fills those before the "
@@ -103,15 +231,13 @@ def verify_table(result: dict[str, Any]) -> str:
                   "the waiting vehicle as hard: no controller holds those within the limit. Without the random "
                   "clutches that fail whatever the controller (those beyond the capacity or creeping by the drag), "
                   f"{_pct(result['pass_rate_reachable'])} pass.", ""]
-    lines += [f"Of the {result['samples']} random clutches, {result['rippling']} have a ripple above "
-              f"{metrics.REQ_RIPPLE_PCT:g} % of their torque over the judged window, {result['oscillating']} of them "
-              "an oscillation (the ripple about the torque's straight line: what oscillates rather than drifts) "
-              "above it.", ""]
-    lines += ["| metric | p5 | p50 | p95 | p99 | max |", "|---|---|---|---|---|---|"]
-    for key, label, _ in _METRICS:
-        p = result["percentiles"].get(key) or {}
-        if p:
-            lines.append(f"| {label} | " + " | ".join(f"{p[q]:.4g}" for q in ("p5", "p50", "p95", "p99", "max")) + " |")
+    if result["samples"]:
+        lines += [f"Of the {plural(result['samples'], 'random clutch', 'random clutches')}, {result['rippling']} "
+                  f"{'has' if result['rippling'] == 1 else 'have'} a ripple above "
+                  f"{metrics.REQ_RIPPLE_PCT:g} % of their torque over the judged window, {result['oscillating']} of "
+                  "them an oscillation (the ripple about the torque's straight line: what oscillates rather than "
+                  "drifts) above it.", ""]
+    lines += [percentiles_md(result)]
     lines += ["", "Worst cases (replay with the command):", ""]
     for w in result["worst"][:5]:
         m = w["metrics"]
@@ -128,6 +254,10 @@ def verify_table(result: dict[str, Any]) -> str:
             if (m.get("input_at_max_pct") or 0.0) >= verify.CAPACITY_SHARE:
                 figs += (f", valve input at the top of its range, the torque short, in {m['input_at_max_pct']:.0f} % "
                          "of the window")
+            if m.get("t_sync_s") is not None:
+                figs += f", lock-up {m['t_sync_s']:.2f} s"
+            if m.get("slip_energy_J") is not None:
+                figs += f", slip energy {m['slip_energy_J']:.0f} J"
         lines.append(f"- #{w['index']}: {figs}; fails: {', '.join(fails) or 'none'}  \n  `{w['replay']}`")
     return "\n".join(lines)
 
@@ -174,4 +304,4 @@ def write(result: dict[str, Any], out: str | Path, design: Design) -> None:
                 for r in result["results"]]
         pd.DataFrame(rows).to_csv(d / "samples.csv", index=False)
         plot_histograms(result, d / "histograms.png")
-        html.write_verify(d / "verify.html", md, result, _METRICS)
+        html.write_verify(d / "verify.html", md, result, metric_specs(result))
