@@ -345,6 +345,18 @@ def test_step_model_recovers_first_order_plus_dead_time():
     assert abs(m1.gain / gain - 1) < 0.01 and m1.vaf > 99
 
 
+def test_a_step_model_puts_no_dead_time_before_the_command():
+    # a response with an instant part (a third of it at the command, as a chamber's fill spike) and a lag for the
+    # rest: a first-order lag's best fit with a free dead time starts before the command (about -0.1 s here)
+    t = np.arange(0.0, 5.0, 1e-3)
+    u = np.where(t >= 1.0, 0.3, 0.1)
+    s = np.clip(t - 1.0, 0.0, None)
+    p = 2e5 + np.where(t >= 1.0, 1e5 + 2e5 * (1 - np.exp(-s / 0.2)), 0.0) + np.random.default_rng(3).normal(0, 2e3, t.size)
+    for m in dynamics.step_models(_recording(t, u, p, "step"), orders=(1, 2)):
+        assert m.theta == 0.0 and m.se["dead_time_s"] == 0.0, (m.order, m.theta)
+        assert m.vaf > 80.0 and abs(m.gain / (3e5 / 0.2) - 1) < 0.1
+
+
 def test_step_model_recovers_a_third_order_valve():
     t = np.arange(0.0, 4.0, 1e-3)
     tau_c, wn, zeta, theta = 0.02, 2 * np.pi * 8.0, 0.5, 0.03

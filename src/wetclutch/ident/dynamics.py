@@ -136,18 +136,30 @@ def step_models(rec: Recording, orders: Sequence[int] | None = None) -> list[Ste
                 break  # VAF above 95 %: the ringing start would not pay
         if res is None:
             continue
+        x, jac_x = res.x, res.jac
+        if x[1] < 0.0:
+            # a dead time before the command is no dead time (a response with an instant part, as the chamber's
+            # fill spike, pulls a lag's fit there): fit again with none, which then has no standard error
+            def at_zero(z: np.ndarray) -> np.ndarray:
+                return np.insert(z, 1, 0.0)
+
+            r = least_squares(lambda z: model(at_zero(z)) - yy, np.delete(x, 1),
+                              jac=lambda z: np.delete(jac(at_zero(z)), 1, axis=1), method="lm", x_scale="jac",
+                              ftol=1e-6, xtol=1e-6, max_nfev=400)
+            x, jac_x = at_zero(r.x), np.insert(r.jac, 1, 0.0, axis=1)
+            res = r
         resid = res.fun
         vaf = float(100.0 * (1.0 - np.var(resid) / max(np.var(yy), 1e-30)))
-        dof = max(tt.size - res.x.size, 1)
-        cov = np.linalg.pinv(res.jac.T @ res.jac) * float(resid @ resid) / dof * inflation(resid)
+        dof = max(tt.size - x.size, 1)
+        cov = np.linalg.pinv(jac_x.T @ jac_x) * float(resid @ resid) / dof * inflation(resid)
         se = np.sqrt(np.abs(np.diag(cov)))
-        shape = np.exp(res.x[2:])
+        shape = np.exp(x[2:])
         names = {1: ["tau_s"], 2: ["omega_n_rad_s", "zeta"], 3: ["tau_coil_s", "omega_n_rad_s", "zeta"]}[order]
         params = dict(zip(names, (float(v) for v in shape)))
         ses = {"gain_bar_per_unit": float(se[0] / BAR / abs(du)) if du else None, "dead_time_s": float(se[1]),
                **dict(zip(names, (float(v) for v in shape * se[2:])))}  # d exp(z) = exp(z) dz
-        out.append(StepModel(rec, order, float(res.x[0] / du) if du else float("nan"), float(res.x[1]), params, ses,
-                             vaf, float(t[k]), float(t[end - 1]), (tt + t[k], yy + p0, model(res.x) + p0)))
+        out.append(StepModel(rec, order, float(x[0] / du) if du else float("nan"), float(x[1]), params, ses,
+                             vaf, float(t[k]), float(t[end - 1]), (tt + t[k], yy + p0, model(x) + p0)))
     return out
 
 
