@@ -431,7 +431,8 @@ def build_parser() -> argparse.ArgumentParser:
     _out_arg(lau)
     _controller_args(lau)
     lau.add_argument("--t-ref", type=float, default=100.0, metavar="NM", help="requested axle torque T_r, N m (default 100)")
-    lau.add_argument("--profile", default="step", metavar="step|ramp|FILE", help="request profile or CSV (time, t_ref)")
+    lau.add_argument("--profile", default="step", metavar="step|ramp|FILE", help="request profile, or a CSV file with columns time (s since the request, made 1 s into the run) and "
+                          "t_ref (N m)")
     lau.add_argument("--oil-temp", type=float, metavar="C", help="oil temperature, C (default rig.oil_temp_C)")
     lau.add_argument("--seed", type=int, default=0, metavar="N", help="sensor noise seed")
     lau.add_argument("--noise-scale", type=float, default=1.0, metavar="X", help="multiplier on the sensor noise")
