@@ -170,6 +170,19 @@ def test_a_binary_file_where_a_toml_file_belongs_is_refused_in_one_line(tmp_path
     cli_refuses([*args, str(binary)], f"{what} '{binary}' is not a text file", tmp_path / "never")
 
 
+def test_a_csv_profile_gives_the_request_the_summary_names_and_refuses_t_ref(tmp_path, cli_refuses):
+    # the request from 0 to 80 N m over 0.2 s after the request, then held: judged against 80 N m, not the 100 N m
+    # that --t-ref defaults to, and an explicit --t-ref beside it would do nothing
+    prof = tmp_path / "profile.csv"
+    prof.write_text("time,t_ref\n0,0\n0.2,80\n2,80\n")
+    cli_refuses(["launch", "--profile", str(prof), "--t-ref", "70"], "--t-ref", tmp_path / "never")
+    out = tmp_path / "run"
+    assert main(["launch", "--profile", str(prof), "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["t_ref_Nm"] == pytest.approx(80.0)
+    assert abs(s["T_ss"] - 80.0) < 0.1 * 80.0
+
+
 def test_write_error_inside_the_output_is_a_one_line_error(tmp_path):
     # disk full or permissions while the files are written: a WetclutchError (the CLI prints it
     # as one line, exit 2) and neither the temporary nor the target directory stays behind

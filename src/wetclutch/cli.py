@@ -221,7 +221,9 @@ def _cmd_launch(args: argparse.Namespace) -> None:
         raise WetclutchError(f"--adaptation: the baseline controller of '{args.controller_file}' has no adaptation")
     from .launch import adaptation
 
-    cond = launch.Conditions(t_ref=args.t_ref, profile=args.profile, oil_temp_C=args.oil_temp, seed=args.seed,
+    if args.t_ref is not None and args.profile not in launch.PROFILES:
+        raise WetclutchError(f"--t-ref: the profile '{args.profile}' gives the request itself; leave --t-ref out")
+    cond = launch.Conditions(t_ref=100.0 if args.t_ref is None else args.t_ref, profile=args.profile, oil_temp_C=args.oil_temp, seed=args.seed,
                              noise=not args.no_noise, noise_scale=args.noise_scale,
                              post_sync_hold=args.post_sync_hold,
                              **({} if args.hold_time is None else {"hold_time": args.hold_time}))
@@ -430,7 +432,8 @@ def build_parser() -> argparse.ArgumentParser:
     lau = sub.add_parser("launch", help="a controlled launch from standstill: signals.csv, summary.json, plot.png")
     _out_arg(lau)
     _controller_args(lau)
-    lau.add_argument("--t-ref", type=float, default=100.0, metavar="NM", help="requested axle torque T_r, N m (default 100)")
+    lau.add_argument("--t-ref", type=float, metavar="NM",
+                     help="requested axle torque T_r, N m (default 100; a CSV profile gives its own)")
     lau.add_argument("--profile", default="step", metavar="step|ramp|FILE", help="request profile, or a CSV file with columns time (s since the request, made 1 s into the run) and "
                           "t_ref (N m)")
     lau.add_argument("--oil-temp", type=float, metavar="C", help="oil temperature, C (default rig.oil_temp_C)")

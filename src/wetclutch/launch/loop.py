@@ -359,7 +359,12 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
                               contact=metrics.first_contact(tr.t, truth["T_c"], cond.t_request),
                               input_max=metrics.input_at_max(signals["time"], signals["u"], ctrl[control.U_MAX],
                                                              resp.window, signals["T_r"], signals["t_ref"]))
-    summary.update(controller=d.kind, t_ref_Nm=cond.t_ref, profile=str(cond.profile), oil_temp_C=temp)
+    judged = cond.t_ref
+    if cond.profile not in PROFILES:
+        # a CSV profile's request is its own: the one the response is judged against, over the steady window
+        w = (signals["time"] >= resp.window[0]) & (signals["time"] <= resp.window[1])
+        judged = float(np.mean(signals["t_ref"][w])) if np.any(w) else float(np.max(signals["t_ref"]))
+    summary.update(controller=d.kind, t_ref_Nm=judged, profile=str(cond.profile), oil_temp_C=temp)
     t_peak, limit = float(np.max(truth["T_plate"])), p.thermal.T_plate_limit_C
     summary.update(T_plate_peak_C=t_peak, T_plate_limit_C=limit, T_plate_over_limit=bool(t_peak > limit))
     found = float(cs[control.CS_KISS]) if d.kind == "launch" and cs[control.CS_FOUND] else None
