@@ -21,12 +21,8 @@ from .plant.scenarios import SCENARIOS, simulate
 from .report.text import plural
 
 EXIT_USAGE = 2
-#: the longest run of ``simulate`` (as the rig's), s
-MAX_T_END_S = 600.0
 #: the most output samples of ``simulate``: --t-end / --dt-out
 MAX_SAMPLES = 1_000_000
-#: the sample time of an exported controller, s
-DEFAULT_FMU_DT_S = 1e-3
 
 
 class _Parser(argparse.ArgumentParser):
@@ -66,6 +62,8 @@ def _load_params(args: argparse.Namespace) -> params_mod.Params:
 def _check_times(args: argparse.Namespace) -> tuple[float, float]:
     """The run's end time and output interval (the scenario's defaults where not given); one line naming the option
     if either is out of range or not a number."""
+    from .rig.experiments import MAX_T_END_S
+
     t_end = SCENARIOS[args.scenario].t_end if args.t_end is None else args.t_end
     if not 0.0 < t_end <= MAX_T_END_S:
         raise WetclutchError(f"--t-end must be in (0, {MAX_T_END_S:g}] s (got {t_end:g})")
@@ -213,19 +211,17 @@ def _cmd_launch(args: argparse.Namespace) -> None:
 
     if args.hold_time is not None and not args.post_sync_hold:
         raise WetclutchError("--hold-time needs --post-sync-hold (it limits that hold)")
-    if args.adaptation and args.controller == "baseline":
-        raise WetclutchError("--adaptation: the baseline controller has no adaptation")
     p, origin = _plant(args)
     d = _design(args, p, origin)
     if args.adaptation and d.kind == "baseline":
-        raise WetclutchError(f"--adaptation: the baseline controller of '{args.controller_file}' has no adaptation")
+        raise WetclutchError("--adaptation: the baseline controller has no adaptation")
     from .launch import adaptation
 
     if args.t_ref is not None and args.profile not in launch.PROFILES:
         raise WetclutchError(f"--t-ref: the profile '{args.profile}' gives the request itself; leave --t-ref out")
-    cond = launch.Conditions(t_ref=100.0 if args.t_ref is None else args.t_ref, profile=args.profile, oil_temp_C=args.oil_temp, seed=args.seed,
-                             noise=not args.no_noise, noise_scale=args.noise_scale,
-                             post_sync_hold=args.post_sync_hold,
+    cond = launch.Conditions(t_ref=100.0 if args.t_ref is None else args.t_ref, profile=args.profile,
+                             oil_temp_C=args.oil_temp, seed=args.seed, noise=not args.no_noise,
+                             noise_scale=args.noise_scale, post_sync_hold=args.post_sync_hold,
                              **({} if args.hold_time is None else {"hold_time": args.hold_time}))
     start = adaptation.load(args.adaptation) if args.adaptation else None
     runs = launch.sequence(p, d, cond, args.sequence, start)
@@ -381,7 +377,7 @@ def _cmd_export_fmu(args: argparse.Namespace) -> None:
             raise WetclutchError("--pwm is an input of the plant: leave out --controller and --controller-file")
         plant, origin = _plant(args)
         d = _design(args, plant, origin)
-        dt = DEFAULT_FMU_DT_S if args.dt is None else args.dt
+        dt = export.DEFAULT_DT_S if args.dt is None else args.dt
         path = export.export_controller(d, args.out, dt)
         print(f"export-fmu: {d.kind} controller, sampled every {dt * 1e3:g} ms -> {path}")
 
@@ -434,8 +430,9 @@ def build_parser() -> argparse.ArgumentParser:
     _controller_args(lau)
     lau.add_argument("--t-ref", type=float, metavar="NM",
                      help="requested axle torque T_r, N m (default 100; a CSV profile gives its own)")
-    lau.add_argument("--profile", default="step", metavar="step|ramp|FILE", help="request profile, or a CSV file with columns time (s since the request, made 1 s into the run) and "
-                          "t_ref (N m)")
+    lau.add_argument("--profile", default="step", metavar="step|ramp|FILE",
+                     help="request profile, or a CSV file with columns time (s since the request, made 1 s into the "
+                          "run) and t_ref (N m)")
     lau.add_argument("--oil-temp", type=float, metavar="C", help="oil temperature, C (default rig.oil_temp_C)")
     lau.add_argument("--seed", type=int, default=0, metavar="N", help="sensor noise seed")
     lau.add_argument("--noise-scale", type=float, default=1.0, metavar="X", help="multiplier on the sensor noise")
@@ -519,7 +516,7 @@ def build_parser() -> argparse.ArgumentParser:
     _controller_args(fmu, "export this controller kind instead of the plant (default: the plant)")
     fmu.add_argument("--pwm", action="store_true", help="plant: the valve input is a PWM duty cycle (default DC volts)")
     fmu.add_argument("--dt", type=float, metavar="S",
-                     help=f"controller: sample time, s (default {DEFAULT_FMU_DT_S:g})")
+                     help="controller: sample time, s (default 0.001)")
     _param_args(fmu)
     fmu.set_defaults(func=_cmd_export_fmu)
 

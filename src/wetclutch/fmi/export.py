@@ -53,7 +53,11 @@ def export_plant(params: Params, out: str | Path, pwm: bool = False) -> Path:
                                    "options.json": json.dumps({"pwm": bool(pwm)})}, out)
 
 
-def export_controller(d: Design, out: str | Path, dt: float = 1e-3) -> Path:
+#: the sample time of an exported controller, s
+DEFAULT_DT_S = 1e-3
+
+
+def export_controller(d: Design, out: str | Path, dt: float = DEFAULT_DT_S) -> Path:
     """Write the FMU of the controller of design ``d`` (a kind designed on a plant, or a controller file's)."""
     if not 1e-4 <= dt <= 1e-2:
         raise WetclutchError(f"--dt must be in 0.0001..0.01 s (got {dt:g})")

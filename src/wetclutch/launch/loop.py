@@ -149,6 +149,37 @@ T_REF_RANGE_NM = (0.0, 1000.0)
 NOISE_SCALE_RANGE = (0.0, 10.0)
 
 
+def condition_error(target: str, x: float, name: str | None = None) -> str | None:
+    """Why a launch cannot take the value ``x`` of condition ``target``.
+
+    Parameters
+    ----------
+    target : str
+        ``oil_temp_C``, ``t_ref`` or ``noise_scale``.
+    x : float
+        The condition's value (oil temperature in C, request in N m, noise factor).
+    name : str, optional
+        What to call it in the sentence (default ``target``; the command line's option).
+
+    Returns
+    -------
+    str or None
+        One sentence naming the condition and its limits, or None if a launch takes ``x``.
+    """
+    name = name or target
+    if target == "oil_temp_C":
+        try:
+            check_oil_temp(x, name)
+        except WetclutchError as e:
+            return str(e)
+        return None
+    if target == "t_ref":
+        lo, hi = T_REF_RANGE_NM
+        return None if lo < x <= hi else f"{name} must be in ({lo:g}, {hi:g}] N m (got {x:g})"
+    lo, hi = NOISE_SCALE_RANGE
+    return None if lo <= x <= hi else f"{name} must be in {lo:g}..{hi:g} (got {x:g})"
+
+
 @dataclass(frozen=True)
 class Conditions:
     """One launch: the request and the conditions it meets.
@@ -187,18 +218,16 @@ class Conditions:
     rtol: float = RTOL
 
     def checked(self) -> Conditions:
-        lo, hi = T_REF_RANGE_NM
-        if not lo < self.t_ref <= hi:
-            raise WetclutchError(f"--t-ref must be in ({lo:g}, {hi:g}] N m (got {self.t_ref:g})")
+        if (why := condition_error("t_ref", self.t_ref, "--t-ref")) is not None:
+            raise WetclutchError(why)
         if self.oil_temp_C is not None:
             check_oil_temp(self.oil_temp_C, "--oil-temp")
         if self.profile not in PROFILES and not Path(self.profile).is_file():
             raise WetclutchError(f"--profile must be step, ramp or an existing CSV file (got '{self.profile}')")
         if self.seed < 0:
             raise WetclutchError(f"--seed must be >= 0 (got {self.seed})")
-        lo, hi = NOISE_SCALE_RANGE
-        if not lo <= self.noise_scale <= hi:
-            raise WetclutchError(f"--noise-scale must be in {lo:g}..{hi:g} (got {self.noise_scale:g})")
+        if (why := condition_error("noise_scale", self.noise_scale, "--noise-scale")) is not None:
+            raise WetclutchError(why)
         if not 1e-4 <= self.dt <= 1e-2:
             raise WetclutchError(f"controller sample time must be in 0.1..10 ms (got {self.dt * 1e3:g} ms)")
         if not self.t_request + 0.5 < self.t_max <= 120.0:

@@ -10,7 +10,7 @@ path of :class:`~wetclutch.params.Params`) or one launch condition (:data:`CONDI
   minus and plus two standard deviations (truncated there);
 * ``corner = true``: the corner cases take this range's extremes.
 
-A condition's range must lie within what a launch takes (:func:`condition_error`): every value drawn lies
+A condition's range must lie within what a launch takes (:func:`wetclutch.launch.loop.condition_error`): every value drawn lies
 between ``low`` and ``high``, so a file whose ends lie within can draw nothing else.
 
 :func:`load` validates a file (one-line errors naming the range and key); :func:`fit`
@@ -29,9 +29,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ParameterError, WetclutchError, read_text
-from ..params import Params, check_oil_temp, load as load_params
-from .loop import NOISE_SCALE_RANGE, T_REF_RANGE_NM
+from ..errors import WetclutchError, read_text
+from ..params import Params, load as load_params
+from .loop import condition_error
 
 DEFAULT_FILE = Path(__file__).resolve().parent / "data" / "ranges.toml"
 #: launch conditions a range may vary (the rest of a range's targets are parameters)
@@ -76,34 +76,6 @@ class Range:
         if self.how == "offset":
             return base + x
         return x
-
-
-def condition_error(target: str, x: float) -> str | None:
-    """Why a launch cannot take the value ``x`` of condition ``target``.
-
-    Parameters
-    ----------
-    target : str
-        One of :data:`CONDITIONS`.
-    x : float
-        The condition's value (oil temperature in C, request in N m, noise factor).
-
-    Returns
-    -------
-    str or None
-        One sentence naming the condition and its limits, or None if a launch takes ``x``.
-    """
-    if target == "oil_temp_C":
-        try:
-            check_oil_temp(x, "oil_temp_C")
-        except ParameterError as e:
-            return str(e)
-        return None
-    if target == "t_ref":
-        lo, hi = T_REF_RANGE_NM
-        return None if lo < x <= hi else f"t_ref must be in ({lo:g}, {hi:g}] N m (got {x:g})"
-    lo, hi = NOISE_SCALE_RANGE
-    return None if lo <= x <= hi else f"noise_scale must be in {lo:g}..{hi:g} (got {x:g})"
 
 
 def _err(where: str, msg: str) -> RangesError:

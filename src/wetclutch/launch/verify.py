@@ -319,13 +319,18 @@ def bins(results: list[dict[str, Any]], rs: list[ranges_mod.Range], n_bins: int 
     return out
 
 
+def metric_values(results: list[dict[str, Any]], key: str) -> np.ndarray:
+    """The finite values of metric ``key`` over ``results`` (a launch without it, or that failed, has none)."""
+    v = np.array([r["metrics"].get(key) for r in results if r["metrics"].get(key) is not None], dtype=float)
+    return v[np.isfinite(v)]
+
+
 def percentiles(results: list[dict[str, Any]]) -> dict[str, dict[str, float]]:
     """Per metric of :data:`METRICS`: the number ``n`` of ``results`` with a finite value, and their 5th, 50th, 95th
     and 99th percentiles and largest value (only ``n`` where there is none)."""
     out = {}
     for k in METRICS:
-        v = np.array([r["metrics"].get(k) for r in results if r["metrics"].get(k) is not None], dtype=float)
-        v = v[np.isfinite(v)]
+        v = metric_values(results, k)
         out[k] = {"n": int(v.size)} | ({f"p{q}": float(np.percentile(v, q)) for q in (5, 50, 95, 99)}
                                        | {"max": float(v.max())} if v.size else {})
     return out

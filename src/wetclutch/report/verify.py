@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pandas as pd
 
 from ..launch import metrics, verify
@@ -56,12 +55,6 @@ def metric_specs(result: dict[str, Any]) -> tuple[tuple[str, str, float | None],
     return _METRICS + extra
 
 
-def _values(rows: list[dict[str, Any]], key: str) -> np.ndarray:
-    """The finite values of metric ``key`` over ``rows`` (a launch without it, or that failed, has none)."""
-    v = np.array([r["metrics"].get(key) for r in rows if r["metrics"].get(key) is not None], dtype=float)
-    return v[np.isfinite(v)]
-
-
 def plot_histograms(result: dict[str, Any], path: Path) -> None:
     """Histograms of the launch metrics over a verification run, with the requirement limits: the random samples
     and the corners stacked, each in its own colour."""
@@ -70,7 +63,7 @@ def plot_histograms(result: dict[str, Any], path: Path) -> None:
     parts = [(rows, lab, c) for rows, lab, c in ((_random(result), "random", "tab:blue"),
                                                  (_corners(result), "corners", "tab:orange")) if rows]
     for ax, (key, label, limit) in zip(axes, specs):
-        vs = [_values(rows, key) for rows, _, _ in parts]
+        vs = [verify.metric_values(rows, key) for rows, _, _ in parts]
         if any(v.size for v in vs):
             ax.hist(vs, bins=40, stacked=True, color=[c for _, _, c in parts], label=[lab for _, lab, _ in parts],
                     alpha=0.8)

@@ -37,6 +37,8 @@ from ..sim.signals import Signal, Step, Table
 from . import sensors
 
 EXPERIMENTS = ("step", "relaxation", "staircase", "noise", "multisine", "chirp")
+#: the longest run, s (also of ``wetclutch simulate``)
+MAX_T_END_S = 600.0
 INPUT_RANGE = {"dc": (0.2, 5.0), "pwm": (0.0, 1.0)}
 DEFAULT_LEVEL = {"dc": 1.0, "pwm": 0.2}
 T_STEP = 1.0  # s: a step starts after a settled first second
@@ -91,8 +93,8 @@ class Settings:
             raise WetclutchError(f"--rate must be in 10..{1.0 / TRUTH_DT / 2:g} Hz (got {self.rate_hz:g})")
         if self.seed < 0:
             raise WetclutchError(f"--seed must be >= 0 (got {self.seed})")
-        if self.t_end is not None and not T_STEP < self.t_end <= 600.0:
-            raise WetclutchError(f"--t-end must be in ({T_STEP:g}, 600] s (got {self.t_end:g})")
+        if self.t_end is not None and not T_STEP < self.t_end <= MAX_T_END_S:
+            raise WetclutchError(f"--t-end must be in ({T_STEP:g}, {MAX_T_END_S:g}] s (got {self.t_end:g})")
         return Settings(self.experiment, self.input_mode, level, from_, temp, self.config, float(self.rate_hz),
                         int(self.seed), bool(self.noise), self.t_end)
 
