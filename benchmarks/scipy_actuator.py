@@ -14,9 +14,9 @@ dissipated in the clutch, the road-load brake, the stem friction, air drag, the 
 the CVT, the work of the actuator's force on the stem, and the oil volumes into and out of
 the clutch (``bookkeeping=False`` leaves them out: a lighter model than the engine's).
 
-* Coil: current controller (setpoint ``g_current u``) saturating at the supply voltage,
-  freewheeling when it asks for a negative voltage: three modes of the output stage,
-  switched at events.
+* Coil: current controller (setpoint ``g_current u``) whose voltage the output stage clips to
+  ``-R_fw I .. V_sup``: saturating at the supply voltage, freewheeling where it asks for less than
+  the freewheel circuit's ``-R_fw I``: three modes of the output stage, switched at events.
 * Magnet: the magnetising current ``I_m`` follows ``I`` through a smoothed play of
   half-width ``I_hyst`` (``dI_m/dt = dI/dt min(z, 1)^n``, ``z = (I - I_m) sign(dI/dt) / I_hyst``, ``n`` the
   play's exponent);
@@ -197,15 +197,16 @@ def _regulator(r, y, u):
     return r[A.R_COIL] * i_ref + r[A.K_AMP] * (i_ref - y[I])
 
 
-def _within(v, v_sup):
+def _within(v, v_fw, v_sup):
     """The regulating output stage's event function: its voltage's margin to either limit (>= 0 inside)."""
-    return min(v, v_sup - v)
+    return min(v - v_fw, v_sup - v)
 
 
 def _amp_mode(r, y, u):
-    """The output stage's mode: saturated (1) above the supply voltage, freewheeling (-1) below zero, else 0."""
+    """The output stage's mode: saturated (1) above the supply voltage, freewheeling (-1) below the freewheel
+    circuit's voltage, else 0."""
     v = _regulator(r, y, u)
-    return 1 if v > r[A.V_SUP] else -1 if v < 0.0 else 0
+    return 1 if v > r[A.V_SUP] else -1 if v < -r[A.R_FW] * y[I] else 0
 
 
 def _rhs(t, y, m, modes, u):
@@ -310,9 +311,9 @@ def _events(m, modes, want_onset, u, y):
     if ma == 1:
         ev.append(("amp", _event(lambda t, y, *_: _regulator(m.r, y, u) - v_sup, -1)))
     elif ma == -1:
-        ev.append(("amp", _event(lambda t, y, *_: -_regulator(m.r, y, u), -1)))
+        ev.append(("amp", _event(lambda t, y, *_: -m.r[A.R_FW] * y[I] - _regulator(m.r, y, u), -1)))
     else:
-        ev.append(("amp", _event(lambda t, y, *_: _within(_regulator(m.r, y, u), v_sup), -1)))
+        ev.append(("amp", _event(lambda t, y, *_: _within(_regulator(m.r, y, u), -m.r[A.R_FW] * y[I], v_sup), -1)))
     if y[P] < m.r[A.P_PRE]:
         # the piston leaves its stop: the stroke's compliance, a thousand times the oil's, begins
         ev.append(("stroke", _event(lambda t, y, *_: y[P] - m.r[A.P_PRE], 1)))

@@ -31,12 +31,19 @@ switched at located events (:func:`piston_event`) where the pressure reaches the
 step that crossed the band unseen would fill the clutch without its stroke.
 
 Electronics: in DC mode a current controller with setpoint ``g_current * u``
-drives the coil; its output saturates at the supply voltage, so a large step
-rises with ``L/R``; when the controller asks for a negative voltage the output
-transistor blocks and the current decays through the freewheel circuit with
-``L/(R + R_freewheel)``. These are the amplifier's three modes (regulating,
-saturated, freewheeling): the coil voltage jumps where the freewheel circuit takes
-over, so the engine switches them at located events (:func:`amplifier`), as it
+drives the coil through a high-side output transistor, with a freewheel circuit
+(diode and ``R_freewheel``) from ground to the coil. The transistor's current
+``I_t`` is what the controller sets; the freewheel circuit carries the rest of
+the coil current, so the coil voltage is ``v = -R_freewheel (I - I_t)`` below 0 V
+and the transistor's drop above: ``v`` is the controller's voltage clipped to
+``-R_freewheel I .. V_supply``. A large step up rises with ``L/R`` at the supply
+voltage; where the controller asks for less than ``-R_freewheel I`` the
+transistor blocks and the current decays with ``L/(R + R_freewheel)``. These are
+the amplifier's three modes (regulating, saturated, freewheeling). The voltage is
+continuous across their edges (a stage whose voltage jumped from 0 V to
+``-R_freewheel I`` would hold a falling input's current on the edge by switching
+back and forth at once, with no time between: Zeno behaviour), but its slope is
+not, so the engine switches them at located events (:func:`amplifier`), as it
 does a clutch's, and never inside a step. In PWM mode the coil sees the supply voltage during the
 high part of each period and freewheels through a diode during the low part, so
 the mean current is about ``duty * V_supply / R_coil``.
@@ -369,13 +376,15 @@ def _regulator_voltage(cur, u, act):
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
 def amplifier_mode(x, act, u):
     """The DC amplifier's mode at state ``x`` and input ``u``: saturated above the supply voltage,
-    freewheeling where the controller asks for a negative one, else regulating (PWM: regulating, unused)."""
+    freewheeling where the controller asks for less than the freewheel circuit's voltage, else regulating (PWM:
+    regulating, unused)."""
     if act[MODE] == PWM:
         return REGULATE
-    v = _regulator_voltage(x[int(act[STATE]) + CURRENT], u, act)
+    cur = x[int(act[STATE]) + CURRENT]
+    v = _regulator_voltage(cur, u, act)
     if v > act[V_SUP]:
         return SATURATED
-    if v < 0.0:
+    if v < -act[R_FW] * cur:
         return FREEWHEEL
     return REGULATE
 
@@ -390,22 +399,12 @@ def amplifier(cur, u, ext, act, mode):
     if act[MODE] == PWM:
         return (act[V_SUP] if ext[int(act[PWM_EXT])] > 0.5 else 0.0), 1.0
     v_reg = _regulator_voltage(cur, u, act)
-    g = _range_margin(v_reg, act, mode)
+    v_fw = -act[R_FW] * cur  # the freewheel circuit's voltage with the output transistor blocked
     if mode == SATURATED:
-        return act[V_SUP], g
+        return act[V_SUP], v_reg - act[V_SUP]
     if mode == FREEWHEEL:
-        return -act[R_FW] * cur, g  # output transistor blocks: freewheel
-    return v_reg, g
-
-
-@njit(cache=True, error_model="numpy", _nrt=False, inline="always")
-def _range_margin(v, act, mode):
-    """The DC amplifier's event function at the controller's voltage ``v`` (:func:`amplifier`)."""
-    if mode == SATURATED:
-        return v - act[V_SUP]
-    if mode == FREEWHEEL:
-        return -v
-    return min(v, act[V_SUP] - v)
+        return v_fw, v_fw - v_reg
+    return v_reg, min(v_reg - v_fw, act[V_SUP] - v_reg)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False, inline="always")
