@@ -248,3 +248,15 @@ def test_input_at_max_is_the_share_of_the_window_at_the_top_of_the_range_short_o
     assert metrics.input_at_max(t, u, 5.0, w, np.where(t >= 2.1, 90.0, 110.0), ref) == pytest.approx(20.0, abs=0.2)
     assert metrics.input_at_max(t, np.minimum(u, 4.99), 5.0, w, short, ref) == 0.0
     assert np.isnan(metrics.input_at_max(t, u, 5.0, (9.0, 9.5), short, ref))
+
+
+def test_settled_t95_is_never_before_the_first_crossing():
+    # a linear rise to 50 N m over 0.2 s whose sample at 95 % reads 1 N m low: the reading first reaches 95 % a
+    # sample later, while the centred average the settled time is read on, looking ahead, enters the band on time
+    t = _grid(2.5)
+    y = 50.0 * np.clip((t - T_REQ) / 0.2, 0.0, 1.0)
+    k = np.flatnonzero(y >= 0.95 * 50.0)[0]
+    y[k] -= 1.0
+    r = metrics.response(t, y, np.where(t >= T_REQ, 50.0, 0.0), T_REQ, None)
+    assert r.t95_s == pytest.approx(t[k + 1] - T_REQ)
+    assert r.t95_settled_s == r.t95_s

@@ -23,7 +23,7 @@ static value ``T_ss``
     average over :data:`SETTLE_SMOOTH`, so that sensor noise on a small request does not count)
     enters the band above 95 % of ``T_ss`` for the last time before :data:`STEADY_START` after
     that start, where the steady window begins for a step (a torque still below the band
-    then: its first entry after it). A response that makes a
+    then: its first entry after it), and never before ``t95_s``. A response that makes a
     first hump to 90-96 % of the request, dips and rises again has one value whatever side of
     95 % the hump ends on; the first crossing (``t95_s``) jumps between the hump and the
     second rise. A wander inside the steady window is judged by the steady-state error and
@@ -216,8 +216,9 @@ def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_
     t95 = float(t[reached[0]] - t_start) if reached.size and T_ss > 0 else np.inf
     # the response phase ends where the steady window begins, counted from the start of the response's clock
     w_resp = min(t_start + STEADY_START, w1)
-    settled = (_settled(t, T_r, after, T_ss, w_resp, w1, t_start, float(t[reached[0]])) if T_ss > 0 and reached.size
-               else np.inf)
+    # never before the first crossing: the centred average looks a few samples ahead of the reading
+    settled = (max(_settled(t, T_r, after, T_ss, w_resp, w1, t_start, float(t[reached[0]])), t95)
+               if T_ss > 0 and reached.size else np.inf)
     upto = after & (t <= w1)
     overshoot = max(0.0, (float(np.max(y[upto])) - T_ss) / T_ss * 100.0) if T_ss > 0 else np.nan
     # on the reading itself, not the smoothed one: a smoothing that hides the noise hides an oscillation
