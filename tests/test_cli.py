@@ -288,6 +288,9 @@ def test_options_that_would_be_ignored_are_refused(tmp_path, cli_refuses):
     (tmp_path / "a.toml").write_text("")
     cli_refuses(["launch", "--controller-file", str(design / "controller.toml"), "--adaptation",
                  str(tmp_path / "a.toml")], "--adaptation: the baseline controller", tmp_path / "never")
+    # nor does a baseline's launch write an adaptation state it does not have
+    assert main(["launch", "--controller", "baseline", "--sequence", "2", "--out", str(tmp_path / "b")]) == 0
+    assert (tmp_path / "b" / "sequence.csv").exists() and not (tmp_path / "b" / "adaptation.toml").exists()
 
 
 @pytest.mark.parametrize(("env", "option", "named"),

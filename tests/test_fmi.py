@@ -75,6 +75,8 @@ def test_fmus_pass_fmpy_validation(fmus, product):
         assert {*MEASURED, "t_ref"} == {n for n, v in names.items() if v.causality == "input"}
         assert [n for n, v in names.items() if v.causality == "output"] == ["u"]
         assert {n for n, v in names.items() if v.causality == "parameter"} == {"kiss_Pa", "hold_margin_Pa"}
+        # a master taking the default step size steps one controller sample at a time
+        assert float(md.defaultExperiment.stepSize) == DT
 
 
 @pytest.mark.parametrize(("oil", "load"), [(None, None), (85.0, 25.0)])

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 from xml.etree.ElementTree import Element
 
-from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real, String
+from pythonfmu import DefaultExperiment, Fmi2Causality, Fmi2Slave, Fmi2Variability, Real, String
 
 from wetclutch.fmi.controller import INPUTS, Controller
 from wetclutch.fmi.plant_fmu import with_initial_unknowns
@@ -45,6 +45,8 @@ class WetclutchController(Fmi2Slave):
         self.dt = float(data.get("dt", 1e-3))
         self.kiss_Pa = float(data.get("kiss_Pa", 0.0))
         self.hold_margin_Pa = 0.0
+        # a master that takes the FMU's default step steps one sample at a time
+        self.default_experiment = DefaultExperiment(start_time=0.0, step_size=self.dt)
         self.register_variable(String("kind", causality=Fmi2Causality.local, variability=Fmi2Variability.constant,
                                       description="controller kind (as designed)"))
         self.register_variable(Real("dt", causality=Fmi2Causality.local, variability=Fmi2Variability.constant,

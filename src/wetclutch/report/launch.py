@@ -15,10 +15,12 @@ from .plots import plot_launch
 
 
 def write(result: LaunchResult, out: str | Path, params: Params, runs: list[LaunchResult] | None = None) -> None:
-    """``signals.csv``, ``truth.csv``, ``summary.json``, ``plot.png`` and ``adaptation.toml`` of a launch (the last of
-    a sequence ``runs``, whose figures go to ``sequence.csv``), written atomically."""
+    """``signals.csv``, ``truth.csv``, ``summary.json``, ``plot.png`` and, for the launch controller,
+    ``adaptation.toml`` of a launch (the last of a sequence ``runs``, whose figures go to ``sequence.csv``), written
+    atomically. (The baseline learns nothing: it has no adaptation to write.)"""
     with atomic_dir(out) as d:
-        (d / "adaptation.toml").write_text(result.adaptation.to_toml())
+        if result.summary["controller"] == "launch":
+            (d / "adaptation.toml").write_text(result.adaptation.to_toml())
         if runs and len(runs) > 1:
             keys = ("t95_s", "t95_settled_s", "overshoot_pct", "creep_Nm", "standby_peak_Nm", "steady_state_error_pct",
                     "kiss_start_Pa", "kiss_found_Pa", "hold_margin_Pa", "friction_factor_found", "friction_slope_found",
