@@ -12,7 +12,8 @@ The clutch is in standby from t = 0; the torque request comes at
 ``t_request`` (1 s); the run goes on through synchronisation and stops
 ``t_after`` seconds after the clutch has locked for good (or at ``t_max``). With
 ``post_sync_hold`` the CVT's ratio moves after lock-up to hold the axle torque
-(:mod:`wetclutch.launch.ratio_hold`), and the run goes on through the hold's time limit.
+(:mod:`wetclutch.launch.ratio_hold`), and the run goes on through the hold's time limit
+(and up to :data:`HOLD_T_MAX` by default: a small request locks late).
 """
 
 from __future__ import annotations
@@ -66,6 +67,10 @@ NEED_NOISE = -2
 #: seconds of sensor noise drawn at a time: a launch ends half a second after its clutch has locked, mostly long
 #: before ``t_max``, and drawing all of ``t_max`` was some 3 % of a launch's time
 NOISE_CHUNK = 4.0
+#: the end of a run at the latest, s: :data:`T_MAX`, or HOLD_T_MAX with the post-sync hold, whose request may be
+#: small enough to lock only after 10-20 s (25 N m on the built-in rig at 10.3 s, 15 N m at 18.6 s)
+T_MAX = 12.0
+HOLD_T_MAX = 60.0
 
 
 def _probe(rn: clutch.RigNetwork) -> np.ndarray:
@@ -193,6 +198,9 @@ class Conditions:
         columns ``time`` (s, from the request) and ``t_ref`` (N m).
     oil_temp_C : float or None
         Oil temperature, C (None: the parameter set's ``rig.oil_temp_C``).
+    t_max : float or None
+        The end of the run at the latest, s (None: :data:`T_MAX`, or :data:`HOLD_T_MAX` with
+        ``post_sync_hold``; see :attr:`horizon`). The run ends ``t_after`` after lock-up if that is sooner.
     rtol : float
         Relative tolerance of the plant's integration between controller samples. The closed loop
         (stick/slip, a valve stem with friction, sensor noise) carries any change at rounding level
@@ -208,7 +216,7 @@ class Conditions:
     oil_temp_C: float | None = None
     t_request: float = 1.0
     t_after: float = 0.5
-    t_max: float = 12.0
+    t_max: float | None = None
     dt: float = 1e-3
     seed: int = 0
     noise: bool = True
@@ -216,6 +224,14 @@ class Conditions:
     post_sync_hold: bool = False
     hold_time: float = ratio_hold.HOLD_TIME
     rtol: float = RTOL
+
+    @property
+    def horizon(self) -> float:
+        """The end of the run at the latest, s: ``t_max``, or by default :data:`T_MAX` (:data:`HOLD_T_MAX` with the
+        post-sync hold)."""
+        if self.t_max is not None:
+            return self.t_max
+        return HOLD_T_MAX if self.post_sync_hold else T_MAX
 
     def checked(self) -> Conditions:
         if (why := condition_error("t_ref", self.t_ref, "--t-ref")) is not None:
@@ -230,8 +246,8 @@ class Conditions:
             raise WetclutchError(why)
         if not 1e-4 <= self.dt <= 1e-2:
             raise WetclutchError(f"controller sample time must be in 0.1..10 ms (got {self.dt * 1e3:g} ms)")
-        if not self.t_request + 0.5 < self.t_max <= 120.0:
-            raise WetclutchError(f"t_max must be in (t_request + 0.5, 120] s (got {self.t_max:g})")
+        if not self.t_request + 0.5 < self.horizon <= 120.0:
+            raise WetclutchError(f"t_max must be in (t_request + 0.5, 120] s (got {self.horizon:g})")
         if not 0.0 < self.hold_time <= 60.0:
             raise WetclutchError(f"--hold-time must be in (0, 60] s (got {self.hold_time:g})")
         if not 1e-10 <= self.rtol <= 1e-3:
@@ -330,7 +346,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
                       ratio_rate=External(1) if cond.post_sync_hold else None)
     net, x0, ext = rn.network.compile()
     ws = new_workspace(net, x0)
-    n = int(round(cond.t_max / cond.dt))
+    n = int(round(cond.horizon / cond.dt))
     t_grid = np.arange(n) * cond.dt
     t_ref = reference(cond, t_grid)
     probe = _probe(rn)

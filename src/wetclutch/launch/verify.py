@@ -87,7 +87,7 @@ class Context:
     def case(self, sample: Sample) -> tuple[Params, launch.Conditions]:
         plant, cond = ranges_mod.apply(self.ranges, sample.values, self.plant)
         base = launch.Conditions()
-        t_max = base.t_max if self.through_lockup else min(base.t_max, base.t_request + HORIZON)
+        t_max = base.horizon if self.through_lockup else min(base.horizon, base.t_request + HORIZON)
         return plant, launch.Conditions(t_ref=cond.get("t_ref", base.t_ref), oil_temp_C=cond.get("oil_temp_C"),
                                         profile=self.profile, seed=sample.seed,
                                         noise_scale=cond.get("noise_scale", base.noise_scale), t_max=t_max)
