@@ -126,8 +126,11 @@ def step_models(rec: Recording, orders: Sequence[int] | None = None) -> list[Ste
         for zeta0 in (0.7, 0.15) if order > 1 else (None,):
             shape = {1: [tau0], 2: [2.0 / tau0, zeta0], 3: [tau0 / 4, 3.0 / tau0, zeta0]}[order]
             try:
-                r = least_squares(lambda z: model(z) - yy, np.array([y_end, theta0, *np.log(shape)]), jac=jac,
-                                  method="lm", x_scale="jac", ftol=1e-6, xtol=1e-6, max_nfev=400)
+                # a trial shape far out (the exponential of a large log) makes a pole 0 or infinite and the
+                # residuals non-finite: the solver steps back from it, and a result that stays there is dropped
+                with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                    r = least_squares(lambda z: model(z) - yy, np.array([y_end, theta0, *np.log(shape)]), jac=jac,
+                                      method="lm", x_scale="jac", ftol=1e-6, xtol=1e-6, max_nfev=400)
             except (ValueError, np.linalg.LinAlgError):
                 continue
             if np.all(np.isfinite(r.x)) and (res is None or r.cost < res.cost):
@@ -143,9 +146,15 @@ def step_models(rec: Recording, orders: Sequence[int] | None = None) -> list[Ste
             def at_zero(z: np.ndarray) -> np.ndarray:
                 return np.insert(z, 1, 0.0)
 
-            r = least_squares(lambda z: model(at_zero(z)) - yy, np.delete(x, 1),
-                              jac=lambda z: np.delete(jac(at_zero(z)), 1, axis=1), method="lm", x_scale="jac",
-                              ftol=1e-6, xtol=1e-6, max_nfev=400)
+            try:
+                with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                    r = least_squares(lambda z: model(at_zero(z)) - yy, np.delete(x, 1),
+                                      jac=lambda z: np.delete(jac(at_zero(z)), 1, axis=1), method="lm",
+                                      x_scale="jac", ftol=1e-6, xtol=1e-6, max_nfev=400)
+            except (ValueError, np.linalg.LinAlgError):
+                continue
+            if not (np.all(np.isfinite(r.x)) and np.all(np.isfinite(r.fun))):
+                continue
             x, jac_x = at_zero(r.x), np.insert(r.jac, 1, 0.0, axis=1)
             res = r
         resid = res.fun
