@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from wetclutch.errors import ParameterError, WetclutchError
 from wetclutch.rig.files import read_measurement, write_measurement
 from wetclutch.rig.sensors import DEFAULT_SENSORS, SensorSpec, measure
-from wetclutch.output import atomic_dir
+from wetclutch.output import atomic_dir, write_csv
 
 
 def grid(duration: float, dt: float) -> np.ndarray:
@@ -234,3 +234,15 @@ def test_corrupt_files_raise_only_wetclutch_error(written, tmp_path_factory, ext
     else:  # a file cut at a harmless place may still read: then it must be sane
         assert frame.columns[0] == "time" and len(frame) > 0
         assert np.all(np.diff(frame["time"].to_numpy()) > 0)
+
+
+@given(values=st.lists(st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64), min_size=3, max_size=3),
+                       min_size=1, max_size=30),
+       flags=st.lists(st.integers(-128, 127), min_size=30, max_size=30), digits=st.sampled_from([6, 8, 10, 17]))
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+def test_write_csv_writes_what_pandas_writes(tmp_path, values, flags, digits):
+    frame = pd.DataFrame(values, columns=["time", "p_clutch", "T_r"])
+    frame["locked"] = np.array(flags[: len(frame)], dtype=np.int8)
+    write_csv(frame, tmp_path / "fast.csv", digits)
+    frame.to_csv(tmp_path / "pandas.csv", index=False, float_format=f"%.{digits}g")
+    assert (tmp_path / "fast.csv").read_text() == (tmp_path / "pandas.csv").read_text()

@@ -18,7 +18,7 @@ import pandas as pd
 from scipy import io as sio
 
 from ..errors import WetclutchError
-from ..output import write_json
+from ..output import write_csv, write_json
 
 
 def _float_column(frame: pd.DataFrame, name: str, what: str) -> np.ndarray:
@@ -58,7 +58,7 @@ def write_measurement(directory: Path, measured: pd.DataFrame, units: dict[str, 
     data = {c: _float_column(measured, c, "measurement") for c in names}
     unit = {c: str(units[c]) for c in names if units.get(c)}
     try:
-        pd.DataFrame(data).to_csv(directory / "measured.csv", index=False, float_format="%.10g")
+        write_csv(pd.DataFrame(data), directory / "measured.csv")
         with MDF(version="4.10") as mdf:
             mdf.append([Signal(data[c], data["time"], name=c, unit=unit.get(c, "")) for c in names[1:]])
             mdf.save(directory / "measured.mf4", overwrite=True)
