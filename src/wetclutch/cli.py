@@ -262,7 +262,7 @@ def _cmd_verify(args: argparse.Namespace) -> None:
     res = verify.run(d, p, args.samples, args.seed, args.workers, rs, progress=not args.quiet,
                      replay_args=_replay_args(args, "controller.toml"), sequence=args.sequence,
                      scheduler=args.scheduler, through_lockup=args.through_lockup)
-    verify_report.write(res, args.out, d)
+    verify_report.write(res, args.out, d, p, args.param_file, args.sets)
     seq = (f"; after {args.sequence} launches of each clutch (first launch {100 * res['pass_rate_first_launch']:.1f} %,"
            f" {plural(res['slams'], 'slam')})" if args.sequence > 1 else "")
     reach = res["pass_rate_reachable"]

@@ -10,12 +10,12 @@ from ..launch import metrics
 from ..launch.campaign import MainJob
 from ..launch.settings import to_toml
 from ..output import atomic_dir, write_json
-from ..params import Params
 from . import html
 from .design import design_md
 from .plots import plot_launch
 from .text import demote, plural, times
-from .verify import REQUIREMENT_LABELS, bins_table, headline, metric_specs, plot_histograms, verify_table
+from .verify import (REQUIREMENT_LABELS, bins_table, headline, metric_specs, plant_named, plot_histograms,
+                     verify_table)
 
 
 def same_samples(ver: dict[str, Any], base: dict[str, Any]) -> dict[str, float]:
@@ -181,15 +181,7 @@ def plant_md(job: MainJob, plant_file: str | Path | None, changes: Sequence[str]
     str
         The parameter file (and changes) named; without a file, whether the plant is the default one.
     """
-    sets = f", with {', '.join(f'`{c}`' for c in changes)}" if changes else ""
-    if plant_file is not None:
-        what = f"the parameter file `{plant_file}`{sets}"
-    elif job.plant == Params() and not changes:
-        what = "the default parameters"
-    elif changes:
-        what = f"the default parameters{sets}"
-    else:
-        what = "a plant other than the defaults"
+    what = plant_named(job.plant, plant_file, changes)
     own = [name for name, d in (("launch", job.design), ("baseline", job.baseline)) if d.plant == job.plant]
     other = [name for name, d in (("launch", job.design), ("baseline", job.baseline)) if d.plant != job.plant]
     text = f"**Plant.** Launches and verifications run on {what}."
@@ -213,6 +205,16 @@ def _first_launch_md(ver: dict[str, Any]) -> str:
         text += f" (corners {sum(bool(r['first_all_pass']) for r in corners)} of {len(corners)})"
     launches = ver["sequence"] * len(ver["results"])
     return text + f"; {ver['slams']} of all {launches} launches slammed (see below)."
+
+
+def _designed_on(d: Any, job: MainJob) -> str:
+    """Which plant a controller was designed on, as the verdict says it: this one or another."""
+    return "this plant" if d.plant == job.plant else "another plant"
+
+
+def _launch_title(summary: dict[str, Any]) -> str:
+    """A nominal launch's conditions: ``"41 C, 100 N m"``."""
+    return f"{summary['oil_temp_C']:g} C, {summary['t_ref_Nm']:g} N m"
 
 
 def _report_md(job: MainJob, summary: dict[str, Any], plant: str = "") -> str:
@@ -239,7 +241,9 @@ def _report_md(job: MainJob, summary: dict[str, Any], plant: str = "") -> str:
         "creeps beyond the limit). " + (_first_launch_md(ver) + " " if ver["sequence"] > 1 else "") + "On the same "
         f"{plural(same['samples'], 'sample')} it meets them in {100 * same['design']:.1f} %, "
         "the baseline (timed fill, "
-        f"kiss-point hold, PI with anti-windup tuned by the SIMC rule on this plant) in {100 * same['baseline']:.1f} %.",
+        # a baseline file designed on another plant was not tuned on this one: the mismatch is what is verified
+        f"kiss-point hold, PI with anti-windup tuned by the SIMC rule on {_designed_on(job.baseline, job)}) in "
+        f"{100 * same['baseline']:.1f} %.",
         "",
         "## Nominal launches",
         "",
@@ -256,13 +260,16 @@ def _report_md(job: MainJob, summary: dict[str, Any], plant: str = "") -> str:
                          f"{_fmt(s['t95_settled_s'], '.3f')} | {_fmt(s['overshoot_pct'], '.1f')} | "
                          f"{_fmt(s['ripple_pct'], '.1f')} | {_fmt(s['creep_Nm'], '.1f')} | {_fmt(s['t_sync_s'], '.2f')} | "
                          + " | ".join(ok(r[k]) for k in metrics.REQUIREMENTS) + " |")
-    lines += ["", "![launch at 41 C, 100 N m](launch_1.png)", "",
+    # the launch shown, named by its own conditions (the caption is the HTML's alt text too)
+    shown = f"![launch at {_launch_title(job.launches[1][0].summary)}](launch_1.png)" if len(job.launches) > 1 else ""
+    lines += ["", *([shown, ""] if shown else []),
               "## Verification: launch controller", "", verify_table(ver), "",
               "### Where it fails: pass rate per range bin", "", bins_table(ver), "",
               "![histograms](verify_launch.png)", "",
               "## Verification: baseline", "", verify_table(base), "", "![histograms](verify_baseline.png)", "",
               "## Loop margins over the corner plants", "",
               "Launch controller: " + _launch_margins_md(job.launch_margins), "", "Baseline: " + _margins_md(job.margins), "",
-              "## The designs", "", demote(design_md(job.design), 2), demote(design_md(job.baseline), 2),
+              "## The designs", "", demote(design_md(job.design, "controller.toml"), 2),
+              demote(design_md(job.baseline, "baseline.toml"), 2),
               "The controllers are in `controller.toml` and `baseline.toml` (`wetclutch launch --controller-file`).", ""]
     return "\n".join(lines)

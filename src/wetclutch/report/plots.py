@@ -76,27 +76,46 @@ def plot_rig(measured: pd.DataFrame, truth: pd.DataFrame, path: Path, title: str
 def plot_launch(signals: pd.DataFrame, truth: pd.DataFrame, summary: dict, path: Path, extra: pd.DataFrame | None = None,
                 extra_label: str = "baseline") -> None:
     """A launch: request and axle torque, pressure, valve input, speeds, plate temperature (``extra``: a second
-    launch to compare)."""
+    launch to compare).
+
+    Parameters
+    ----------
+    signals, truth
+        The launch's measured and true signals.
+    summary
+        Its figures: the controller, oil temperature, request and verdicts name the plot.
+    path
+        The PNG written.
+    extra
+        The measured signals of a second launch, drawn in the panels of torque, pressure and valve input.
+    extra_label
+        What the second launch is.
+    """
     heat = "T_plate" in truth.columns
     fig, axes = plt.subplots(5 if heat else 4, 1, figsize=(9, 11 if heat else 9), sharex=True)
+    name = summary.get("controller", "")
+    # one colour per launch in every panel (and the true torque in a third): the default colour cycle would give the
+    # second launch another colour in the torque panel, where the true torque comes first, than in the others
+    mine, theirs, true = "tab:blue", "tab:orange", "tab:green"
     t = signals["time"]
     ax = axes[0]
     ax.plot(t, signals["t_ref"], "k--", lw=1.2, label="request t_ref")
-    ax.plot(t, signals["T_r"], lw=0.8, label=f"T_r measured ({summary.get('controller', '')})")
-    ax.plot(truth["time"], truth["T_r"], lw=1.0, alpha=0.8, label="T_r true")
+    ax.plot(t, signals["T_r"], lw=0.8, color=mine, label=f"T_r measured, {name}")
+    ax.plot(truth["time"], truth["T_r"], lw=1.0, alpha=0.8, color=true, label=f"T_r true, {name}")
     if extra is not None:
-        ax.plot(extra["time"], extra["T_r"], lw=0.8, alpha=0.8, label=f"T_r {extra_label}")
+        ax.plot(extra["time"], extra["T_r"], lw=0.8, alpha=0.8, color=theirs, label=f"T_r measured, {extra_label}")
     ax.set_title("Axle torque [N m]", fontsize=10, loc="left")
-    axes[1].plot(t, signals["p_clutch"] * 1e-5, lw=0.8, label="p_clutch measured")
+    axes[1].plot(t, signals["p_clutch"] * 1e-5, lw=0.8, color=mine, label=f"p_clutch measured, {name}")
     if extra is not None:
-        axes[1].plot(extra["time"], extra["p_clutch"] * 1e-5, lw=0.8, alpha=0.8, label=f"p_clutch {extra_label}")
+        axes[1].plot(extra["time"], extra["p_clutch"] * 1e-5, lw=0.8, alpha=0.8, color=theirs,
+                     label=f"p_clutch measured, {extra_label}")
     axes[1].set_title("Clutch pressure [bar]", fontsize=10, loc="left")
-    axes[2].plot(t, signals["u"], lw=0.8, label="u")
+    axes[2].plot(t, signals["u"], lw=0.8, color=mine, label=f"u, {name}")
     if extra is not None:
-        axes[2].plot(extra["time"], extra["u"], lw=0.8, alpha=0.8, label=f"u {extra_label}")
+        axes[2].plot(extra["time"], extra["u"], lw=0.8, alpha=0.8, color=theirs, label=f"u, {extra_label}")
     axes[2].set_title("Valve input [V]", fontsize=10, loc="left")
     for c in ("omega_p", "omega_1", "omega_s"):
-        axes[3].plot(t, signals[c], lw=0.8, label=c)
+        axes[3].plot(t, signals[c], lw=0.8, label=f"{c}, {name}")
     axes[3].set_title("Speeds [rad/s]", fontsize=10, loc="left")
     if heat:
         axes[4].plot(truth["time"], truth["T_plate"], lw=1.0, label="T_plate true")
@@ -105,10 +124,20 @@ def plot_launch(signals: pd.DataFrame, truth: pd.DataFrame, summary: dict, path:
         axes[4].set_title("Clutch plate temperature [C]", fontsize=10, loc="left")
     for a in axes:
         a.grid(True, alpha=0.3)
-        a.legend(loc="upper right", fontsize=7, ncol=2)
+        # where the lines leave room: in the upper right the legend hid the torque's steady level
+        a.legend(loc="best", fontsize=7, ncol=2)
     axes[-1].set_xlabel("time [s]")
     req = summary.get("requirements", {})
-    fig.suptitle("launch: " + ", ".join(f"{k} {'pass' if v else 'FAIL'}" for k, v in req.items()))
+    # the launch's conditions and whose verdicts these are: the PNG is shared on its own, without the report's text
+    what = ", ".join(f for f in (f"{name} controller" if name else "",
+                                 f"oil {summary['oil_temp_C']:g} C" if summary.get("oil_temp_C") is not None else "",
+                                 f"request {summary['t_ref_Nm']:g} N m" if summary.get("t_ref_Nm") is not None else "")
+                     if f)
+    verdicts = ", ".join(f"{k} {'pass' if v else 'FAIL'}" for k, v in req.items())
+    title = "launch" + (f" ({what})" if what else "")
+    if verdicts:
+        title += f"\n{name + ': ' if name else ''}{verdicts}"
+    fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

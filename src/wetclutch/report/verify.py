@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -11,6 +12,7 @@ from ..launch import metrics, verify
 from ..launch.design import Design
 from ..launch.settings import to_toml
 from ..output import atomic_dir, write_json
+from ..params import Params
 from . import html
 from .plots import plt
 from .text import plural, times
@@ -123,11 +125,19 @@ def sequence_md(result: dict[str, Any]) -> str:
     seq = result.get("sequence", 1)
     rand, corners = _random(result), _corners(result)
     launches = seq * len(result["results"])
-    if seq > 1:
+    if seq > 1 and result.get("controller") == "baseline":
+        # the baseline learns nothing: its launches of a clutch differ in their noise seeds only, and a sentence of
+        # adaptation would credit it with one
+        text = (f"Each clutch was launched {times(seq)} in a row; the baseline has no adaptation to carry over, so its "
+                "launches of a clutch differ in their sensor noise only. The pass rates and metrics below are those of "
+                f"the last launch. On the first launch {_pct(result['pass_rate_first_launch'])} of the random "
+                "clutches met every requirement")
+    elif seq > 1:
         text = (f"Each clutch was launched {times(seq)} in a row, the controller's adaptation carried over from launch "
                 "to launch; the pass rates and metrics below are those of the last launch. On the first "
                 f"launch, before any adaptation, {_pct(result['pass_rate_first_launch'])} of the random clutches "
                 "met every requirement")
+    if seq > 1:
         if corners:
             first = sum(bool(r["first_all_pass"]) for r in corners)
             text += f" (corners {first} of {len(corners)})"
@@ -206,7 +216,10 @@ def verify_table(result: dict[str, Any]) -> str:
     if failed:
         n_rand = sum(1 for r in failed if not r["corner"])
         verb = "fails" if len(failed) == 1 else "fail"
-        lines += [f"Of the {plural(len(failed), 'launch', 'launches')} that {verb} ({n_rand} of the random clutches, "
+        # each row is a clutch judged on its last launch: with a sequence, "launches" would count a third of them
+        what = (plural(len(failed), "clutch", "clutches") + f" that {verb} on the last launch"
+                if result.get("sequence", 1) > 1 else f"{plural(len(failed), 'launch', 'launches')} that {verb}")
+        lines += [f"Of the {what} ({n_rand} of the random clutches, "
                   f"{len(failed) - n_rand} of the corners), {result['failures_unfilled']} had the plates touch only "
                   "after the request: the fill was not complete when torque was asked for, and the response time "
                   f"counts the rest of it ({result['failures_fill_too_slow']} of them would not have been filled in "
@@ -227,11 +240,13 @@ def verify_table(result: dict[str, Any]) -> str:
     if result["samples"]:
         lines += [f"Of the {plural(result['samples'], 'random clutch', 'random clutches')}, {result['rippling']} "
                   f"{'has' if result['rippling'] == 1 else 'have'} a ripple above "
-                  f"{metrics.REQ_RIPPLE_PCT:g} % of their torque over the judged window, {result['oscillating']} of "
+                  f"{metrics.REQ_RIPPLE_PCT:g} % of {'its' if result['rippling'] == 1 else 'their'} torque over the "
+                  f"judged window, {result['oscillating']} of "
                   "them an oscillation (the ripple about the torque's straight line: what oscillates rather than "
                   "drifts) above it.", ""]
     lines += [percentiles_md(result)]
     lines += ["", "Worst cases (replay with the command):", ""]
+    corner_of = {r["index"]: r["corner"] for r in result["results"]}
     for w in result["worst"][:5]:
         m = w["metrics"]
         fails = [k for k, ok in w["requirements"].items() if not ok]
@@ -240,7 +255,8 @@ def verify_table(result: dict[str, Any]) -> str:
         else:
             t95 = f"{m['t95_settled_s']:.3f} s" if m.get("t95_settled_s") is not None else "95 % never reached"
             ovs = f"{m['overshoot_pct']:.1f} %" if m.get("overshoot_pct") is not None else "n/a"
-            figs = (f"ess {m['steady_state_error_pct']:.2f} %, t95 {t95}, overshoot {ovs}, "
+            # the response time judged is the settled t95, not the first crossing the nominal table shows beside it
+            figs = (f"ess {m['steady_state_error_pct']:.2f} %, t95 (settled) {t95}, overshoot {ovs}, "
                     f"ripple {m['ripple_pct']:.1f} %, creep {m['creep_Nm']:.1f} N m")
             if (m.get("contact_s") or 0.0) > 0.0:
                 figs += f", plates touched {m['contact_s']:.3f} s after the request"
@@ -251,8 +267,17 @@ def verify_table(result: dict[str, Any]) -> str:
                 figs += f", lock-up {m['t_sync_s']:.2f} s"
             if m.get("slip_energy_J") is not None:
                 figs += f", slip energy {m['slip_energy_J']:.0f} J"
-        lines.append(f"- #{w['index']}: {figs}; fails: {', '.join(fails) or 'none'}  \n  `{w['replay']}`")
+        # a corner is no draw of the ranges: say which set the case belongs to, as the tables above keep them apart
+        kind = {True: " (corner)", False: " (random)"}.get(corner_of.get(w["index"]), "")
+        lines.append(f"- #{w['index']}{kind}: {figs}; fails: {', '.join(fails) or 'none'}  \n  `{w['replay']}`")
     return "\n".join(lines)
+
+
+def _edge(v: float) -> str:
+    """A bin edge: four significant digits, but a large one (a pressure offset in Pa) in full, as the ranges are
+    written elsewhere in the reports (``-30000``, not ``-3e+04``)."""
+    text = f"{v:.4g}"
+    return f"{v:.0f}" if "e+" in text else text
 
 
 def bins_table(result: dict[str, Any]) -> str:
@@ -271,7 +296,7 @@ def bins_table(result: dict[str, Any]) -> str:
         table = result["bins"][rg["name"]]
         how = {"abs": "", "rel": " x", "offset": " +"}[rg["how"]]
         unit = f" {rg['unit']}" if rg["unit"] else ""
-        cells = [f"{t['low']:.4g}..{t['high']:.4g}: {_pct(t['pass_rate'].get('all'))}"
+        cells = [f"{_edge(t['low'])}..{_edge(t['high'])}: {_pct(t['pass_rate'].get('all'))}"
                  + (f" / {_pct(t['pass_rate_first_launch'])}" if seq else "") + f" ({t['samples']})" for t in table]
         worst = min((t for t in table if t["samples"]), key=lambda t: t["pass_rate"]["all"], default=None)
         fails = ""
@@ -282,17 +307,48 @@ def bins_table(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def write(result: dict[str, Any], out: str | Path, design: Design) -> None:
+def plant_named(plant: Params, plant_file: str | Path | None, changes: Sequence[str] = ()) -> str:
+    """Where a plant came from, as a report names it: its parameter file (and ``--set`` changes), or whether it is the
+    default one."""
+    sets = f", with {', '.join(f'`{c}`' for c in changes)}" if changes else ""
+    if plant_file is not None:
+        return f"the parameter file `{plant_file}`{sets}"
+    if changes:
+        return f"the default parameters{sets}"
+    return "the default parameters" if plant == Params() else "a plant other than the defaults"
+
+
+def write(result: dict[str, Any], out: str | Path, design: Design, plant: Params | None = None,
+          plant_file: str | Path | None = None, changes: Sequence[str] = ()) -> None:
     """``verify.json``, ``verify.md``, ``samples.csv``, ``histograms.png`` and the verified ``controller.toml``
-    (which the replay commands name), written atomically."""
+    (which the replay commands name), written atomically.
+
+    Parameters
+    ----------
+    result
+        What :func:`wetclutch.launch.verify.run` returned.
+    design
+        The controller verified.
+    plant, plant_file, changes
+        The plant the ranges varied around (default the design's), the parameter file it was read from and the
+        ``--set`` changes made to it: ``verify.md`` names them, and whether the controller was designed on it.
+    """
+    plant = design.plant if plant is None else plant
+    own = ("designed on it" if design.plant == plant
+           else "designed on another plant (the `[plant]` section of `controller.toml`)")
+    head = (f"**Plant.** The ranges vary around {plant_named(plant, plant_file, changes)}; the {design.kind} "
+            f"controller verified was {own}.\n\n")
     with atomic_dir(out) as d:
         (d / "controller.toml").write_text(to_toml(design))
         write_json(d / "verify.json", result)
-        md = ("# Verification\n\n" + verify_table(result) + "\n\n## Pass rate per range bin\n\n"
+        md = ("# Verification\n\n" + head + verify_table(result) + "\n\n## Pass rate per range bin\n\n"
               + bins_table(result) + "\n\n![histograms](histograms.png)\n")
         (d / "verify.md").write_text(md)
         rows = [{"index": r["index"], "corner": r["corner"], **r["values"], **r["metrics"], **r["requirements"],
-                 "all_pass": r["all_pass"], "fill_too_slow": r["fill_too_slow"],
+                 "all_pass": r["all_pass"],
+                 # the first launch's verdict and the slams of a sequence: the figures verify.md states about them
+                 # can then be recomputed from this file alone
+                 "first_all_pass": r["first_all_pass"], "slams": r["slams"], "fill_too_slow": r["fill_too_slow"],
                  "creep_of_the_drag": r["creep_of_the_drag"], "beyond_capacity": r["beyond_capacity"]}
                 for r in result["results"]]
         pd.DataFrame(rows).to_csv(d / "samples.csv", index=False)
