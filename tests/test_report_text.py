@@ -88,7 +88,10 @@ def test_launch_margins_count_unstable_loops_apart_from_judder():
     assert "At 1 corner the driveline is unstable by itself" in text
     assert "stable at every one" not in text
     ok = main_report._launch_margins_md(rows[1:])
-    assert "**unstable**" not in ok and "The loop is stable at every one of these 1 corner." in ok
+    assert "**unstable**" not in ok and "The loop is stable at that corner." in ok
+    # the loop's own corners, not the verification's
+    assert "at each of its 3 corners: every combination of the extremes of the ranges that enter that model (" in text
+    assert "these are not the verification's corners" in text
 
 
 # ---------------------------------------------------------------- launches per clutch, first launch, slams

@@ -480,7 +480,7 @@ def design(plant: Params, kind: str = "launch", origin: dict[str, str] | None = 
     settings = {"p_kiss": plant_values["p_kiss"][0], **b, "kp": kp, "ki": ki}
     sources = {"p_kiss": plant_values["p_kiss"][1], **{k: "controller default" for k in b}, "kp": rule, "ki": rule,
                "input_V": map_src,
-               "fill_s": f"plant: time to {FILL_STROKE:.0%} of the stroke at full input, per oil temperature"}
+               "fill_s": f"plant: time to {100 * FILL_STROKE:.0f} % of the stroke at full input, per oil temperature"}
     return Design(kind, plant, settings, sources, MAP_TEMPS.copy(), MAP_PRESSURES.copy(), table, fill)
 
 

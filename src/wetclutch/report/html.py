@@ -216,7 +216,7 @@ def verify_plots(result: Mapping[str, Any], specs: MetricSpecs) -> LayoutDOM:
         every = np.asarray(src.data[key], dtype=float)
         ok = np.isfinite(every)
         v = every[ok]
-        f = figure(title=label, width=WIDTH // 2, height=220, x_axis_label=label, y_axis_label="launches",
+        f = figure(title=label, width=WIDTH // 2, height=220, x_axis_label=label, y_axis_label="cases",
                    tools="pan,wheel_zoom,box_zoom,reset,save")
         if v.size:
             # the random samples and the corners stacked on common bins: the pass rates are the random samples',

@@ -138,7 +138,10 @@ def _launch_margins_md(rows: list[dict[str, Any]]) -> str:
     text = ("The torque loop of the launch controller linearised about the launch's start (`wetclutch.launch.margins`: "
             "the valve's pressure path as a first-order-plus-dead-time fit on each corner plant, the clutch output's "
             "resonance on the axle seen through the ratio with the friction curve's damping, the friction-factor "
-            "estimate and the torque integrator)")
+            "estimate and the torque integrator), at each of its "
+            f"{len(rows)} corners: every combination of the extremes of the ranges that enter that model "
+            f"({', '.join(rows[0]['corner'])}), the other ranges at their nominal values; these are not the "
+            "verification's corners")
     if stable:
         g = min(stable, key=lambda r: r["gain_margin"])
         p = min(stable, key=lambda r: r["phase_margin_deg"])
@@ -148,7 +151,8 @@ def _launch_margins_md(rows: list[dict[str, Any]]) -> str:
                  f"{g['resonance_hz']:.1f} Hz, damping ratio {g['damping']:.2f}) and its smallest phase margin, "
                  f"**{p['phase_margin_deg']:.0f} deg**, at {_where(p)}.")
         text += (_unstable_md(bad, len(rows)) if bad else
-                 f" The loop is stable at every one of these {plural(len(stable), 'corner')}.")
+                 (" The loop is stable at that corner." if len(stable) == 1 else
+                  f" The loop is stable at every one of these {len(stable)} corners."))
     else:
         text += " has no corner whose driveline is damped."
     if judder:

@@ -74,7 +74,7 @@ def plot_histograms(result: dict[str, Any], path: Path) -> None:
         ax.legend(fontsize=7)
         ax.set_xlabel(label, fontsize=9)
         ax.grid(True, alpha=0.3)
-    axes[0].set_ylabel("launches")
+    axes[0].set_ylabel("cases")
     fig.suptitle(f"verify {result['controller']}: all requirements met in {headline(result)}", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -154,7 +154,8 @@ def sequence_md(result: dict[str, Any]) -> str:
 
 
 def _percentile_rows(pct: dict[str, dict[str, float]], specs: Any) -> list[str]:
-    """Table rows: each metric's launches with a value and its percentiles (``pct``, as the verification gives)."""
+    """Table rows: each metric's count of cases with a value and its percentiles (``pct``, as the verification
+    gives)."""
     out = []
     for key, label, _ in specs:
         p = pct.get(key, {})
@@ -180,7 +181,8 @@ def percentiles_md(result: dict[str, Any]) -> str:
         One table per set of launches that the run holds, each saying what it is over.
     """
     specs = metric_specs(result)
-    head = ["| metric | launches with a value | p5 | p50 | p95 | p99 | max |", "|---|---|---|---|---|---|---|"]
+    # a case is a clutch judged on its last launch (with a sequence, one of several launches)
+    head = ["| metric | cases with a value | p5 | p50 | p95 | p99 | max |", "|---|---|---|---|---|---|---|"]
     lines: list[str] = []
     for count, pct, what, why in (
             (result["cases"] - result["corners"], result["percentiles"], ("random clutch", "random clutches"),
