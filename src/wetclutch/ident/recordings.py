@@ -17,6 +17,10 @@ A table needs ``name`` and may have ``unit``; two channels cannot read one colum
 Units are converted to SI (command ``u`` in V or duty; ``oil_temp`` in C) here
 and nowhere else. A channel's unit is taken from the map, else from the file,
 else from ``meta.json`` beside the file, else the rig's SI unit is assumed.
+
+A file's channels need not all be readable: a column of text or an MDF channel on a raster that does not cover the
+record is left out unless the map (or the rig's naming) asks for it. Lost samples (up to :data:`GAP_MAX_SAMPLES` in
+a row) and a jittery clock are interpolated onto a uniform grid; missing values (NaN) are refused.
 """
 
 from __future__ import annotations
@@ -54,12 +58,24 @@ UNITS: Mapping[str, Mapping[str, tuple[float, float]]] = {
                  "psi": (6894.757293168, 0.0)},
     "torque": {"nm": (1.0, 0.0), "n*m": (1.0, 0.0), "n.m": (1.0, 0.0), "n·m": (1.0, 0.0), "knm": (1e3, 0.0)},
     "speed": {"rad/s": (1.0, 0.0), "rpm": (2 * math.pi / 60, 0.0), "1/min": (2 * math.pi / 60, 0.0),
-              "rev/s": (2 * math.pi, 0.0), "deg/s": (math.pi / 180, 0.0)},
+              "u/min": (2 * math.pi / 60, 0.0), "rev/s": (2 * math.pi, 0.0), "deg/s": (math.pi / 180, 0.0)},
     "temperature": {"c": (1.0, 0.0), "degc": (1.0, 0.0), "°c": (1.0, 0.0), "k": (1.0, -273.15),
                     "degf": (5 / 9, -160 / 9), "°f": (5 / 9, -160 / 9)},
     "command": {"v": (1.0, 0.0), "mv": (1e-3, 0.0), "duty": (1.0, 0.0), "-": (1.0, 0.0), "%": (0.01, 0.0)},
 }
 _PWM_UNITS = {"duty", "-", "%"}
+
+#: sample rates identification can use (Hz). Below, the onset's stroke line and dead time have too few samples; above,
+#: no clutch rig samples: outside the two a time column's unit is wrong (ms read as s, or s as ms)
+RATE_MIN_HZ, RATE_MAX_HZ = 50.0, 200e3
+#: the shortest record (s) with anything to identify (a step needs the second before its command)
+DURATION_MIN_S = 0.1
+#: lost samples in a row that are interpolated; a longer gap in the time stamps is refused: filled with a straight line
+#: it would pass for measured pressure and torque
+GAP_MAX_SAMPLES = 2
+#: a record whose clock starts before 0 or this late (s; a DAQ's running or absolute clock) is counted from its first
+#: sample: the models that replay a command start it at time 0
+CLOCK_START_MAX_S = 60.0
 
 
 @dataclass
@@ -70,7 +86,8 @@ class Recording:
     ----------
     path : Path
     data : dict of str to ndarray
-        ``time`` and the channels of :data:`CHANNELS` the file has, on a uniform time grid.
+        ``time`` and the channels of :data:`CHANNELS` the file has, on a uniform time grid. ``time`` is the file's,
+        or counted from its first sample where the file's clock starts before 0 or after :data:`CLOCK_START_MAX_S`.
     experiment : str
         One of :data:`wetclutch.rig.experiments.EXPERIMENTS`, from ``meta.json`` or detected.
     config : str
@@ -215,12 +232,15 @@ def load(path: str | Path, channel_map: Mapping[str, Mapping[str, str]] | None =
     Raises
     ------
     WetclutchError
-        One line naming the file (and channel): unreadable file, missing channel,
-        unknown unit, non-finite samples, time stamps not increasing.
+        One line naming the file (and channel): unreadable file, missing channel (with the columns the file has),
+        unknown unit, non-finite samples, time stamps not increasing, a gap of more than :data:`GAP_MAX_SAMPLES`
+        samples, a sample rate outside :data:`RATE_MIN_HZ` .. :data:`RATE_MAX_HZ` or a record shorter than
+        :data:`DURATION_MIN_S` (both a time column in the wrong unit).
     """
     path = Path(path)
     cmap = dict(channel_map or {})
-    columns, file_units = read_columns(path)
+    # the columns the map names: another column the reader cannot read (text, another raster) is no reason to refuse
+    columns, file_units = read_columns(path, {cmap.get(ch, {}).get("name", ch) for ch in CHANNELS})
     meta = _read_meta(path)
     settings = meta.get("settings") if isinstance(meta.get("settings"), dict) else {}
     meta_units = meta.get("units") if isinstance(meta.get("units"), dict) else {}
@@ -233,7 +253,8 @@ def load(path: str | Path, channel_map: Mapping[str, Mapping[str, str]] | None =
         name = entry.get("name", ch)
         if name not in columns:
             if ch in REQUIRED:
-                raise fail(f"required channel '{ch}'" + (f" (mapped to '{name}')" if name != ch else "") + " missing")
+                raise fail(f"required channel '{ch}'" + (f" (mapped to '{name}')" if name != ch else "")
+                           + f" missing ({_found(columns)})")
             continue
         default = MEASURED_UNITS[ch] if ch != "u" else ("duty" if settings.get("input_mode") == "pwm" else "V")
         unit = entry.get("unit") or file_units.get(name) or meta_units.get(name) or default
@@ -247,11 +268,14 @@ def load(path: str | Path, channel_map: Mapping[str, Mapping[str, str]] | None =
         raise fail(f"channel '{missing}' missing (a clutch run needs all of {', '.join(DRIVELINE)})")
     _check(data, fail)
     t = data["time"]
+    if t[0] < 0.0 or t[0] > CLOCK_START_MAX_S:
+        data["time"] = t = t - t[0]
     steps = np.diff(t)
     dt = float(np.median(steps))
     if np.max(np.abs(steps - dt)) > 0.01 * dt:
         # estimators filter and take spectra on a uniform grid; a jittery DAQ clock is resampled
-        grid = t[0] + dt * np.arange(int((t[-1] - t[0]) / dt) + 1)
+        # (the tolerance keeps the last sample where the span is a whole number of steps but for rounding)
+        grid = t[0] + dt * np.arange(int((t[-1] - t[0]) / dt + 1e-6) + 1)
         data = {c: grid if c == "time" else np.interp(grid, t, x) for c, x in data.items()}
     config = settings.get("config") if settings.get("config") in CONFIGS else ("clutch" if present else "valve-only")
     if config == "clutch" and not present:
@@ -276,7 +300,7 @@ def _check(data: dict[str, np.ndarray], fail: Any) -> None:
             k = int(bad.sum())
             raise fail(f"channel '{ch}' has {k} non-finite sample{'' if k == 1 else 's'} (NaN run from {where})")
     if n < 16:
-        raise fail(f"channel 'time' has only {n} samples")
+        raise fail(f"channel 'time' has only {n} sample{'' if n == 1 else 's'}")
     steps = np.diff(t)
     if np.any(steps == 0.0):
         i = int(np.argmax(steps == 0.0))
@@ -284,6 +308,33 @@ def _check(data: dict[str, np.ndarray], fail: Any) -> None:
     if np.any(steps < 0.0):
         i = int(np.argmax(steps < 0.0))
         raise fail(f"channel 'time' is not increasing: {t[i]:.6g} s then {t[i + 1]:.6g} s at sample {i + 1}")
+    dt = float(np.median(steps))
+    # a time column in ms read as s (or the reverse) passes every check above and gives numbers 1000 times off
+    unit = "; is its unit right? (a channel map gives it: time = {{ name = \"...\", unit = \"{}\" }})"
+    if 1.0 / dt < RATE_MIN_HZ:
+        raise fail(f"channel 'time' steps {dt:.3g} s, a sample rate of {1.0 / dt:.3g} Hz below the {RATE_MIN_HZ:g} Hz "
+                   "identification needs" + unit.format("ms"))
+    if 1.0 / dt > RATE_MAX_HZ:
+        raise fail(f"channel 'time' steps {dt:.3g} s, a sample rate of {1.0 / dt:.3g} Hz above {RATE_MAX_HZ:g} Hz"
+                   + unit.format("s"))
+    if t[-1] - t[0] < DURATION_MIN_S:
+        raise fail(f"channel 'time' spans {t[-1] - t[0]:.3g} s, too short to identify anything "
+                   f"(at least {DURATION_MIN_S:g} s)" + unit.format("s"))
+    if np.any(gaps := steps > (GAP_MAX_SAMPLES + 1.5) * dt):
+        i = int(np.argmax(gaps))
+        raise fail(f"channel 'time' has a gap of {steps[i]:.3g} s after t = {t[i]:.6g} s (about "
+                   f"{round(steps[i] / dt) - 1} samples of {dt:.3g} s missing; {GAP_MAX_SAMPLES} in a row are "
+                   "interpolated): cut the file there or fill the gap")
+
+
+def _found(columns: Mapping[str, Any]) -> str:
+    """The columns a file has, for an error that cannot find one: a header with units in it or a wrong separator
+    shows at once."""
+    names = list(columns)
+    if not names:
+        return "the file has no numeric channels"
+    more = f" and {len(names) - 8} more" if len(names) > 8 else ""
+    return "the file has " + ", ".join(f"'{n}'" for n in names[:8]) + more
 
 
 def command_changes(t: np.ndarray, u: np.ndarray) -> np.ndarray:

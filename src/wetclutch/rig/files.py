@@ -7,9 +7,14 @@ included, and :func:`read_measurement` reads one back as a checked table.
 
 from __future__ import annotations
 
+import csv
 import gc
+import io
+import itertools
 import re
 import sys
+import warnings
+from collections.abc import Collection
 from pathlib import Path
 from typing import Any
 
@@ -72,24 +77,126 @@ def _one_line(text: object) -> str:  # parser messages may span lines; errors ar
     return re.sub(r"\s*[\r\n]+\s*", " ", str(text)).strip()
 
 
-def _read_csv(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    frame = pd.read_csv(path)
-    return {str(c): _float_column(frame, c, f"measurement file '{path}'") for c in frame.columns}, {}
+#: separators a measurement CSV may have, by precedence: a logger's tabs, a European Excel's semicolons (which comes
+#: with decimal commas), else commas
+_SEPARATORS = ("\t", ";", ",")
+_DECIMAL_COMMA = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
+#: lines read to tell the dialect: the header, a unit row if any, and enough data to see decimal commas
+_HEAD_LINES = 50
 
 
-def _read_mat(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    raw = sio.loadmat(path, simplify_cells=True)
+def _is_number(cell: str, decimal: str) -> bool:
+    try:
+        float(cell.replace(decimal, ".") if decimal != "." else cell)
+    except ValueError:
+        return False
+    return True
+
+
+def _csv_dialect(text: str) -> tuple[int, str, str, dict[str, str] | None]:
+    """The number of comment lines before the header, the separator, the decimal mark and the unit row (column ->
+    unit; None without one) of a CSV's ``text``.
+
+    Comment lines start with ``#`` (a logger's preamble: rig, date, operator). A unit row is a line under the header
+    whose cells are all text (``bar``, ``[rpm]``), as DAQ exports and spreadsheets write it; brackets around a unit are
+    dropped. A semicolon- or tab-separated file whose numbers have a comma before their digits uses decimal commas (a
+    European Excel); a comma-separated file cannot (its cells would split there).
+    """
+    lines = list(itertools.islice(io.StringIO(text), _HEAD_LINES))
+    skip = next((i for i, line in enumerate(lines) if not line.lstrip().startswith("#")), len(lines))
+    lines = lines[skip:]
+    sep = next((s for s in _SEPARATORS if lines and s in lines[0]), ",")
+    head = list(csv.reader(lines, delimiter=sep))
+    cells = [c.strip() for row in head[1:] for c in row]
+    decimal = "," if sep != "," and any(_DECIMAL_COMMA.fullmatch(c) for c in cells) else "."
+    units = None
+    if len(head) > 1:
+        second = [c.strip() for c in head[1]]
+        if any(second) and not any(_is_number(c, decimal) for c in second if c):
+            names = [c.strip() for c in head[0]]
+            units = {n: u.strip("[]()").strip() for n, u in zip(names, second) if u.strip("[]()").strip()}
+    return skip, sep, decimal, units
+
+
+def _numeric(column: pd.Series, decimal: str) -> tuple[np.ndarray, int | None]:
+    """A CSV column as float64 and the row of its first cell that is not a number (None if every cell is one or is
+    empty: an empty cell is a missing sample, NaN)."""
+    if pd.api.types.is_bool_dtype(column) or pd.api.types.is_numeric_dtype(column):
+        return column.to_numpy(dtype=np.float64, na_value=np.nan), None
+    text = column.astype("string").str.strip()
+    if decimal != ".":
+        text = text.str.replace(decimal, ".", regex=False)
+    values = pd.to_numeric(text, errors="coerce")
+    bad = (values.isna() & text.notna() & (text != "")).to_numpy(dtype=bool)
+    return values.to_numpy(dtype=np.float64, na_value=np.nan), (int(np.argmax(bad)) if bad.any() else None)
+
+
+def _read_csv(path: Path, wanted: Collection[str] | None = None) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+    raw = path.read_bytes()
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:  # a Windows spreadsheet's export ("°C" in cp1252)
+        text = raw.decode("cp1252", errors="replace")
+    skip, sep, decimal, units = _csv_dialect(text)
+    with warnings.catch_warnings():
+        # more cells in a row than in the header: pandas would take the first columns for an index and shift the
+        # names onto the wrong data (a comma-separated file with decimal commas)
+        warnings.simplefilter("error", pd.errors.ParserWarning)
+        try:
+            frame = pd.read_csv(io.StringIO(text), sep=sep, decimal=decimal, skipinitialspace=True, index_col=False,
+                                skiprows=[*range(skip), *([skip + 1] if units is not None else [])])
+        except pd.errors.ParserWarning:
+            raise _fail(path, "rows have more cells than the header has names"
+                        + (" (decimal commas in a comma-separated file?)" if decimal == "." else "")) from None
+    first_row = skip + (3 if units is not None else 2)  # the file's line of the first data row
+    columns = {}
+    for c in frame.columns:
+        name = str(c).strip()
+        values, bad = _numeric(frame[c], decimal)
+        if bad is not None:
+            if wanted is None or name in wanted:
+                raise _fail(path, f"column '{name}' is not numeric (line {bad + first_row}: "
+                                  f"{str(frame[c].iloc[bad])[:40]!r})")
+            continue  # an unrelated text column (a status, a comment) is no reason to refuse the file
+        columns[name] = values
+    return columns, {n: u for n, u in (units or {}).items() if n in columns}
+
+
+def _read_mat(path: Path, wanted: Collection[str] | None = None) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+    try:
+        raw = sio.loadmat(path, simplify_cells=True)
+    except NotImplementedError:  # scipy's word for the HDF5 format of MATLAB's -v7.3
+        raise _fail(path, "is a MATLAB v7.3 (HDF5) file, which is not read: save it with save(..., '-v7')") from None
     units = raw.pop("units", {})
     units = {str(k): v for k, v in units.items() if isinstance(v, str)} if isinstance(units, dict) else {}
-    columns = {}
+    columns: dict[str, np.ndarray] = {}
+    structs = []
     for name, value in raw.items():
         if isinstance(value, dict) and "X" in value and "Y" in value:
             return _dspace_columns(value)
-        value = np.asarray(value)
+        if isinstance(value, dict) and not name.startswith("__"):
+            structs.append(value)
+            continue
         # Skip MATLAB's bookkeeping entries and anything that is not one numeric vector.
-        if not name.startswith("__") and value.dtype.kind in "biuf" and value.squeeze().ndim <= 1:
-            columns[name] = np.atleast_1d(value.squeeze()).astype(np.float64)
+        if not name.startswith("__") and (vector := _mat_vector(value)) is not None:
+            columns[name] = vector
+    # a struct of vectors (``save('run.mat', 'meas')`` of ``meas.time``, ``meas.p_clutch`` ...): its fields are the
+    # channels, a variable of the same name winning
+    for struct in structs:
+        for name, value in struct.items():
+            if name == "units" and isinstance(value, dict):
+                units = {**{str(k): v for k, v in value.items() if isinstance(v, str)}, **units}
+            elif name not in columns and (vector := _mat_vector(value)) is not None:
+                columns[name] = vector
     return columns, units
+
+
+def _mat_vector(value: Any) -> np.ndarray | None:
+    """A MATLAB variable as a float64 vector (row or column), or None: not numeric, or not one vector."""
+    value = np.asarray(value)
+    if value.dtype.kind in "biuf" and value.squeeze().ndim <= 1:
+        return np.atleast_1d(value.squeeze()).astype(np.float64)
+    return None
 
 
 def _dspace_columns(rec: dict[str, Any]) -> tuple[dict[str, np.ndarray], dict[str, str]]:
@@ -109,47 +216,81 @@ def _dspace_columns(rec: dict[str, Any]) -> tuple[dict[str, np.ndarray], dict[st
     return columns, units
 
 
-def _read_mdf(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+def _read_mdf(path: Path, wanted: Collection[str] | None = None) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     from asammdf import MDF  # imported here: asammdf is slow to import
 
     with open(path, "rb") as stream, MDF(stream) as mdf:
-        # The first channel group with a master channel supplies the time base;
-        # channels on other rasters are left for a later reader with channel maps.
-        group = next((g for g in range(len(mdf.groups)) if mdf.masters_db.get(g) is not None), None)
-        if group is None:
-            return {}, {}
-        columns, units = {"time": np.asarray(mdf.get_master(group), dtype=np.float64)}, {"time": "s"}
+        # channel group -> name -> (samples, unit, time stamps), the numeric vectors of groups with a master channel
+        groups: dict[int, dict[str, tuple[np.ndarray, str, np.ndarray]]] = {}
         for sig in mdf.iter_channels(skip_master=True):
             samples = np.asarray(sig.samples)
-            wanted = sig.group_index == group and sig.name not in columns
-            if wanted and samples.dtype.kind in "biuf" and samples.ndim == 1:
-                columns[sig.name] = samples.astype(np.float64)
-                if sig.unit:
-                    units[sig.name] = str(sig.unit)
+            if mdf.masters_db.get(sig.group_index) is None or samples.dtype.kind not in "biuf" or samples.ndim != 1:
+                continue
+            groups.setdefault(sig.group_index, {}).setdefault(
+                sig.name, (samples.astype(np.float64), str(sig.unit or ""), np.asarray(sig.timestamps, np.float64)))
+    if not groups:
+        return {}, {}
+    # A DAQ writes one channel group per raster (the analog channels at 1 kHz, CAN signals at 100 Hz, a temperature
+    # at 10 Hz). The time base is the group with most of the wanted channels (then most channels, then most samples);
+    # the other groups' channels are interpolated onto it.
+    score = lambda g: (sum(n in wanted for n in groups[g]) if wanted is not None else 0,  # noqa: E731
+                       len(groups[g]), next(iter(groups[g].values()))[2].size)
+    base = max(sorted(groups), key=score)
+    t = next(iter(groups[base].values()))[2]
+    columns, units = {"time": t}, {"time": "s"}
+    for g in [base, *sorted(set(groups) - {base})]:
+        for name, (samples, unit, ts) in groups[g].items():
+            if name in columns:
+                continue
+            if g != base:
+                step = float(np.median(np.diff(ts))) if ts.size > 1 else 0.0
+                usable = ts.size > 1 and np.all(np.diff(ts) > 0)
+                if not (usable and ts[0] - step <= t[0] and t[-1] <= ts[-1] + step):
+                    if wanted is None or name in wanted:
+                        span = f"t = {ts[0]:.6g}..{ts[-1]:.6g} s" if ts.size else "no samples"
+                        raise _fail(path, f"channel '{name}' (channel group {g}, another raster than the time base's "
+                                          f"group {base}) " + (f"covers {span}, not the record's t = {t[0]:.6g}.."
+                                                               f"{t[-1]:.6g} s" if usable else
+                                                               "has too few or no increasing time stamps"))
+                    continue
+                samples = np.interp(t, ts, samples)
+            columns[name] = samples
+            if unit:
+                units[name] = unit
     return columns, units
 
 
 _READERS = {".csv": _read_csv, ".mat": _read_mat, ".mf4": _read_mdf, ".mdf": _read_mdf}
 
 
-def read_columns(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+def read_columns(path: str | Path,
+                 wanted: Collection[str] | None = None) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     """Read every numeric channel of a measurement file, unchecked.
 
-    CSV, MDF 4 (``.mf4``/``.mdf``; the first channel group with a master channel,
-    which is returned as ``time``) and MATLAB files: one vector per variable, or a
-    dSPACE recording (a struct with ``X`` and ``Y``).
+    CSV (comma-, semicolon- or tab-separated, decimal commas beside semicolons or tabs, an optional unit row under
+    the header), MDF 4 (``.mf4``/``.mdf``; the time base is a channel group's master channel, returned as ``time``,
+    and channels of other groups, other rasters, are interpolated onto it) and MATLAB files: one vector per variable
+    or per field of a struct, or a dSPACE recording (a struct with ``X`` and ``Y``).
+
+    Parameters
+    ----------
+    path : str or Path
+    wanted : collection of str, optional
+        The channels the caller needs. Other channels that cannot be read as one numeric series (a CSV column of text,
+        an MDF channel on a raster that does not cover the record) are left out rather than refused; the MDF time
+        base is the group holding most of them. None: every channel is wanted.
 
     Returns
     -------
     dict of str to ndarray
         Channel name -> float64 samples, as stored (lengths may differ).
     dict of str to str
-        Unit per channel, as far as the file records them (none for CSV).
+        Unit per channel, as far as the file records them (for a CSV, its unit row).
 
     Raises
     ------
     WetclutchError
-        The file is missing, of unknown type, unreadable or corrupt.
+        The file is missing, of unknown type, unreadable or corrupt, or a wanted channel is not numeric.
     """
     path = Path(path)
     reader = _READERS.get(path.suffix.lower())
@@ -166,7 +307,7 @@ def read_columns(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, str
         gc.freeze()
     try:
         try:
-            return reader(path)
+            return reader(path, wanted)
         except WetclutchError:
             raise
         except Exception as err:  # parsers of corrupt files raise almost anything
