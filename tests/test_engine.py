@@ -244,3 +244,37 @@ def test_a_slip_that_only_touches_zero_within_a_step_stops_the_body(eps):
     assert tr.events[0, 2] == engine.LOCKED and tr.events[0, 0] == pytest.approx(t_stop, abs=1e-7)
     assert tr.events[1, 2] == 1 and tr.events[1, 0] == pytest.approx(np.pi / 10.0, abs=1e-9)
     assert tr.energy_residual() < 1e-6
+
+
+def test_a_network_without_clutches_or_gears_moves():
+    # nothing to switch: the constraint factors (the inverse inertias alone) must still be made once
+    net = Network()
+    a = net.body("a", 2.0)
+    net.source("drive", a, 3.0)
+    tr = integrate(net, 1.0)
+    np.testing.assert_allclose(tr.speed("a"), 1.5 * tr.t, atol=1e-12)  # J w' = T
+    # two masses on a spring, one kicked: the twist rings at w_n = sqrt(k (J1 + J2) / (J1 J2))
+    J1, J2, k, w0 = 1.0, 3.0, 40.0, 2.0
+    net = Network()
+    b1, b2 = net.body("b1", J1, w0=w0), net.body("b2", J2)
+    net.spring("s", b1, b2, k)
+    tr = integrate(net, 2.0, dt_out=1e-3, rtol=1e-10, atol=1e-12)
+    wn = np.sqrt(k * (J1 + J2) / (J1 * J2))
+    # phi' = w1 - w2, the relative speed w0 cos(wn t): phi = (w0 / wn) sin(wn t)
+    np.testing.assert_allclose(tr.spring_deflection("s"), w0 / wn * np.sin(wn * tr.t), atol=1e-8)
+    np.testing.assert_allclose(J1 * tr.speed("b1") + J2 * tr.speed("b2"), J1 * w0, atol=1e-9)  # momentum
+    assert tr.energy_residual() < 1e-8
+
+
+def test_a_sine_load_beyond_a_brakes_capacity_breaks_it_away_each_period_by_default():
+    # 6 sin(2 pi t) on a body held by a 5 N m brake: beyond the capacity from asin(5/6) / (2 pi) = 0.1568 s to
+    # 0.3432 s of each half period; with no step limit the locked body's steps grew past that window unseen
+    net = Network()
+    a = net.body("a", 1.0)
+    net.brake("brake", a, 5.0)
+    net.source("drive", a, Sine(6.0, 1.0))
+    tr = integrate(net, 3.0)
+    t_break = np.arcsin(5.0 / 6.0) / (2.0 * np.pi)
+    starts = tr.events[tr.events[:, 2] != 2, 0]  # breakaways, forward (1) and backward (-1)
+    np.testing.assert_allclose(starts, t_break + 0.5 * np.arange(6), atol=1e-9)
+    assert tr.stats["events"] == 12 and np.max(np.abs(tr.speed("a"))) > 0.1

@@ -28,10 +28,16 @@ def stale(fact, clm, grm):
 
     The constraint matrix depends on the modes only, so a restart that keeps them (an input
     sample of a closed loop, a breakpoint) reuses its factors. ``fact`` records the modes of
-    the factors and is updated here: the caller refactors when this returns True.
+    the factors and is updated here: the caller refactors when this returns True. Its last slot says whether
+    factors were made at all: a network without clutches and gears has no modes to tell, and its factors (the
+    inverse inertias alone) must still be made once.
     """
     nc = clm.shape[0]
     is_stale = False
+    made = fact.shape[0] - 1
+    if fact[made] != 0:
+        is_stale = True
+        fact[made] = 0
     for j in range(nc):
         if fact[j] != clm[j]:
             is_stale = True

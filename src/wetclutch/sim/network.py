@@ -33,7 +33,7 @@ from ..physics import thermal as th_mod
 from . import coldstart
 from . import workspace as wsp
 from .integrator import advance
-from .signals import Signal, as_signal, compile_signals
+from .signals import KIND, SINE, SN_FREQ, Signal, as_signal, compile_signals
 
 GROUND = -1
 
@@ -570,6 +570,17 @@ def outputs(n: int, nx: int, naux: int, nc: int) -> tuple[np.ndarray, np.ndarray
     return np.zeros(n), np.zeros((n, nx)), np.zeros((n, naux)), np.zeros((n, nc), dtype=np.int64)
 
 
+#: steps per period of a network's fastest sine signal, by default (:func:`integrate`)
+SINE_STEPS = 10
+
+
+def sine_step_limit(sig: np.ndarray) -> float:
+    """The largest step (s) :func:`integrate` takes by default on a network whose compiled signal table is ``sig``:
+    a :data:`SINE_STEPS`-th of the shortest sine period, or no limit without sines."""
+    freq = [abs(row[SN_FREQ]) for row in sig if int(row[KIND]) == SINE and row[SN_FREQ] != 0.0]
+    return 1.0 / (SINE_STEPS * max(freq)) if freq else np.inf
+
+
 def integrate(
     network: Network,
     t_end: float,
@@ -586,13 +597,19 @@ def integrate(
         Local error tolerances of the Dormand-Prince 5(4) step control; ``atol`` is one for every
         state or one per state (:attr:`Network.n_state` of them).
     h_max
-        Largest step, s.
+        Largest step, s. By default none, but a tenth of the shortest period of the network's sine signals: a
+        locked clutch's event function is checked at the ends of each step, and a sine load that rises beyond the
+        capacity and falls back within one step would go unseen (a stuck body driven by ``6 sin(2 pi t)`` against a
+        5 N m brake broke away at no step of up to a second). A load that exceeds a capacity for a shorter time
+        still needs a smaller ``h_max``.
     """
     if not t_end > 0.0:
         raise ValueError("t_end must be > 0")
     if not 0.0 < dt_out <= t_end:
         raise ValueError("dt_out must be in (0, t_end]")
     net, x0, ext = network.compile()
+    if h_max == np.inf:
+        h_max = sine_step_limit(net.sig)
     tol = np.asarray(atol, dtype=np.float64)
     if tol.ndim > 1 or tol.size not in (1, x0.size) or not np.all(tol > 0.0):
         raise ValueError(f"atol must be > 0, one value or one per state ({x0.size})")

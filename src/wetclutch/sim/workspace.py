@@ -161,7 +161,7 @@ class Workspace(NamedTuple):
     y_old: np.ndarray  # state at the start of the current step
     clm_before: np.ndarray  # clutch modes before a restart
     released: np.ndarray  # (nc + ng) scratch for the mode decision
-    fact: np.ndarray  # (nc + ng) clutch and gear modes the factors in A, G were made for
+    fact: np.ndarray  # (nc + ng + 1) clutch and gear modes the factors in A, G were made for, then 0 once made
     evlog: np.ndarray  # (EVENT_LOG, 3): t, clutch index, new mode
 
 
@@ -208,6 +208,6 @@ def new_workspace(net, x0: np.ndarray, t0: float = 0.0, h0: float = 1e-4) -> Wor
         y_old=np.zeros(nx),
         clm_before=np.zeros(nc, dtype=np.int64),
         released=np.zeros(nc + ng, dtype=np.int64),
-        fact=np.full(nc + ng, NO_MODE, dtype=np.int64),
+        fact=np.full(nc + ng + 1, NO_MODE, dtype=np.int64),  # the modes the factors were made for, then whether made
         evlog=np.zeros((EVENT_LOG, 3)),
     )
