@@ -278,3 +278,12 @@ def test_a_sine_load_beyond_a_brakes_capacity_breaks_it_away_each_period_by_defa
     starts = tr.events[tr.events[:, 2] != 2, 0]  # breakaways, forward (1) and backward (-1)
     np.testing.assert_allclose(starts, t_break + 0.5 * np.arange(6), atol=1e-9)
     assert tr.stats["events"] == 12 and np.max(np.abs(tr.speed("a"))) > 0.1
+
+
+@pytest.mark.parametrize(("option", "value", "named"), [("rtol", -1.0, "rtol"), ("rtol", 0.0, "rtol"),
+                                                         ("h_max", 0.0, "h_max")])
+def test_integrate_refuses_a_tolerance_or_step_limit_that_checks_nothing(option, value, named):
+    net = Network()
+    net.body("a", 1.0, w0=1.0)
+    with pytest.raises(ValueError, match=named):
+        integrate(net, 1.0, **{option: value})

@@ -807,3 +807,18 @@ def test_cli_identify_refuses_one_run_given_twice(rig_data, tmp_path, cli_refuse
     cli_refuses(["identify", str(mat), str(mat)], f"measurement file '{mat}' is given twice", tmp_path / "I")
     cli_refuses(["identify", str(mat), str(csv)], f"measurement files '{mat}' and '{csv}' hold the same recording",
                 tmp_path / "I")
+
+
+def test_an_identification_shows_what_it_found_in_one_line(identified):
+    text = repr(identified)
+    assert text.startswith(f"Identification({len(identified.recordings)} recordings, ") and "\n" not in text
+    found = [k for k, (how, _) in identified.sources().items() if how == "identified"]
+    assert found and all(k in text for k in found) and len(text) < 1000
+
+
+def test_a_design_on_an_identification_names_identified_sources(identified):
+    from wetclutch.launch import design as designs
+
+    d = designs.design(identified.identified, "launch", identified.origin())
+    assert identified.origin()["driveline.ratio"] == "identified"
+    assert "identified" in d.sources["ratio"]

@@ -501,3 +501,14 @@ def test_a_torque_ahead_of_the_rising_request_does_not_hold_the_response_back():
         assert s["t95_s"] < 0.1
         settled.append(s["t95_settled_s"])
     assert sum(settled) / len(settled) < 1.1 * metrics.REQ_T95_S, settled
+
+
+def test_a_launch_and_a_design_show_their_figures_not_their_arrays():
+    d = designs.cached(Params())
+    res = launch.simulate(Params(), d, launch.Conditions(t_ref=80.0, t_max=2.5, noise=False))
+    text = repr(res)
+    assert "\n" not in text and len(text) < 400
+    assert f"overshoot {res.summary['overshoot_pct']:.1f} %" in text and "all requirements met" in text
+    shown = repr(d)
+    assert shown.startswith("Design(launch, ") and f"p_kiss={d.settings['p_kiss']:.4g}" in shown
+    assert "[[" not in shown and len(shown) < 2000

@@ -302,3 +302,13 @@ def test_a_section_changed_in_place_is_checked_too():
     with pytest.raises(ValueError, match="float_type"):
         p.driveline.ratio = True
     assert p.driveline.ratio_min == 0.4 and p.driveline.ratio == 0.5
+
+
+def test_overrides_take_numpy_arrays_tuples_and_numbers():
+    # np.polyfit's coefficients are what an engineer passes for a friction curve
+    coef = np.polyfit([0.0, 50.0, 100.0], [0.026, 0.035, 0.036], 2)
+    p = pm.load(overrides={"friction.mu_slip_poly": coef, "driveline.ratio": np.float32(0.6)})
+    assert p.friction.mu_slip_poly == coef.tolist() and p.driveline.ratio == pytest.approx(0.6)
+    assert pm.load(overrides={"friction.mu_slip_poly": tuple(coef)}).friction.mu_slip_poly == coef.tolist()
+    with pytest.raises(pm.ParameterError, match=r"friction.mu_slip_poly.0.: must be a number"):
+        pm.load(overrides={"friction.mu_slip_poly": np.array([True, False])})

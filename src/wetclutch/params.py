@@ -531,8 +531,18 @@ def load(
         for dotted, value in flatten(given).items():
             _merge(data, dotted, value)
     for dotted, value in (overrides or {}).items():
-        _merge(data, dotted, value)
+        _merge(data, dotted, _plain(value))
     return _validate(data)
+
+
+def _plain(value: Any) -> Any:
+    """An override as TOML would give it: a numpy array, tuple or numpy number (``np.polyfit``'s coefficients) as a
+    list of Python numbers or a Python number; anything else as it is, for the check to judge."""
+    if isinstance(value, (np.ndarray, np.generic)):
+        return value.tolist()
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    return value
 
 
 def flatten(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:

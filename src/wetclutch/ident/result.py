@@ -70,6 +70,18 @@ class Identification:
     #: dotted parameter path -> why it comes from the prior (or the commanded value) instead of the runs
     notes: dict[str, str] = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        # a notebook shows this: what was found from what, not every estimate's samples
+        found = [k for k, (how, _) in self.sources().items() if how == "identified"]
+        return (f"Identification({len(self.recordings)} recordings, {len(self.estimates)} estimates; identified: "
+                f"{', '.join(found) or 'nothing'}; from the prior: {len(self.sources()) - len(found)} parameters)")
+
+    def origin(self) -> dict[str, str]:
+        """Parameter path -> ``identified`` or ``prior``: how each parameter of :data:`PARAMS_FROM` was obtained,
+        as a design's ``origin`` takes it (``wetclutch.launch.design.design(res.identified, "launch",
+        res.origin())`` names each setting's source as ``wetclutch design --param-file`` does)."""
+        return {k: how for k, (how, _) in self.sources().items()}
+
     def sources(self) -> dict[str, tuple[str, str]]:
         """Parameter path -> (``identified`` or ``prior``, reason), for the parameters of :data:`PARAMS_FROM`."""
         found = identified_values(self.prior, self.estimates)

@@ -194,6 +194,12 @@ class Design:
     input_V: np.ndarray
     fill_s: np.ndarray = field(default_factory=lambda: np.zeros(MAP_TEMPS.size))
 
+    def __repr__(self) -> str:
+        # a notebook shows this: the kind and the settings, not the feedforward map's table
+        settings = ", ".join(f"{k}={v:.4g}" for k, v in self.settings.items())
+        return (f"Design({self.kind}, {len(self.settings)} settings: {settings}; feedforward map "
+                f"{self.temps_C.size} x {self.pressures_Pa.size})")
+
     def key(self) -> str:
         """A stable text key of the design (for caches of its nominal responses)."""
         return json.dumps([self.kind, self.plant.model_dump(), self.settings, self.input_V.round(12).tolist(),

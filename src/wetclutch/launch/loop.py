@@ -294,6 +294,18 @@ class LaunchResult:
     kiss_found_Pa: float | None = None
     adaptation: Adaptation = field(default_factory=Adaptation)
 
+    def __repr__(self) -> str:
+        # a notebook shows this: the figures, not every sample of the signals
+        s = self.summary
+        fmt = lambda k, f: "-" if s.get(k) is None else format(s[k], f)  # noqa: E731
+        failed = [k for k, ok in s.get("requirements", {}).items() if not ok]
+        return (f"LaunchResult({self.controller}, t_ref {fmt('t_ref_Nm', 'g')} N m, oil {fmt('oil_temp_C', 'g')} C: "
+                f"t95 {fmt('t95_settled_s', '.3f')} s (settled), overshoot {fmt('overshoot_pct', '.1f')} %, "
+                f"error {fmt('steady_state_error_pct', '.2f')} %, creep {fmt('creep_Nm', '.1f')} N m, "
+                f"lock-up {fmt('t_sync_s', '.2f')} s; "
+                + ("all requirements met" if not failed else "fails " + ", ".join(failed))
+                + f"; {len(self.signal_columns.get('time', ()))} samples)")
+
     @functools.cached_property
     def signals(self) -> pd.DataFrame:
         """The measured signals, ``t_ref`` and ``u`` on the controller's sample times."""

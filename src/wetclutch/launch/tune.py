@@ -109,6 +109,11 @@ class Tuning:
     #: what the candidates' scores depend on besides the design (:func:`scoring`); a resumed search keeps them
     settings: dict[str, Any] = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        # a notebook shows this: the outcome, not the history of every candidate
+        return (f"Tuning({self.design.kind}, {len(self.history)} candidates scored, chosen: {self.chosen}; "
+                f"best training score {self.best_score:.4g}, pass rate {self.best_rate:.3g})")
+
 
 def against_start(candidate: list[bool], start: list[bool]) -> tuple[int, int, float]:
     """McNemar's exact test of a candidate against the start on the same plants (pass or fail on each):

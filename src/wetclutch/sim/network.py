@@ -607,6 +607,10 @@ def integrate(
         raise ValueError("t_end must be > 0")
     if not 0.0 < dt_out <= t_end:
         raise ValueError("dt_out must be in (0, t_end]")
+    if not 0.0 < rtol < 1.0:  # a tolerance of 0 or below accepts every step: the run would go on, unchecked
+        raise ValueError(f"rtol must be in (0, 1) (got {rtol!r})")
+    if not h_max > 0.0:
+        raise ValueError(f"h_max must be > 0 (got {h_max!r})")
     net, x0, ext = network.compile()
     if h_max == np.inf:
         h_max = sine_step_limit(net.sig)
