@@ -198,6 +198,22 @@ class Conditions:
         columns ``time`` (s, from the request) and ``t_ref`` (N m).
     oil_temp_C : float or None
         Oil temperature, C (None: the parameter set's ``rig.oil_temp_C``).
+    t_request : float
+        When the torque is requested, s into the run (the clutch in standby before it).
+    t_after : float
+        How long the run goes on after the clutch has locked for good, s.
+    dt : float
+        The controller's sample time, s (0.1..10 ms).
+    seed : int
+        Seed of the sensors' noise (>= 0); launch ``i`` of a sequence takes ``seed + i``.
+    noise : bool
+        Whether the sensors add noise (False: ideal readings).
+    noise_scale : float
+        Factor on every sensor's noise (0..10).
+    post_sync_hold : bool
+        Whether the CVT's ratio holds the axle torque after lock-up (:mod:`wetclutch.launch.ratio_hold`).
+    hold_time : float
+        The post-sync hold's time limit, s (0..60).
     t_max : float or None
         The end of the run at the latest, s (None: :data:`T_MAX`, or :data:`HOLD_T_MAX` with
         ``post_sync_hold``; see :attr:`horizon`). The run ends ``t_after`` after lock-up if that is sooner.

@@ -221,6 +221,10 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
         The controller (designed on any plant).
     plant
         The plant under test, around which the ranges vary (default: the design's own).
+    n, seed
+        The number of random samples of the ranges and the seed they are drawn with (their noise seeds too).
+    workers
+        Local processes (default: one per core).
     ranges
         What varies (default: :data:`wetclutch.launch.ranges.DEFAULT_FILE`).
     replay_args
@@ -239,6 +243,19 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
     through_lockup
         Run every launch to its lock-up (lock-up times and slip energies), not only to :data:`HORIZON` after
         the request, which decides every requirement.
+    corners
+        Whether the corner cases (every combination of the extremes of the ranges marked ``corner``) run before
+        the random samples.
+    profile
+        The request's profile (``step``, ``ramp`` or a CSV file; :class:`wetclutch.launch.loop.Conditions`).
+    progress
+        Show a progress bar (rich).
+
+    Returns
+    -------
+    dict
+        The content of ``verify.json`` (:func:`summarize`): pass rates overall, per requirement and per range bin,
+        of the first launch and of the corners, percentiles, worst cases and every sample's row (``results``).
     """
     global _SHARED
     check_options(n, seed, workers)
