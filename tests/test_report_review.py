@@ -178,6 +178,9 @@ def test_the_launch_plot_keeps_one_colour_per_launch_and_names_its_conditions(tm
 
     assert len(colours("baseline")) == 1 and len(colours("measured, launch") | colours("u, launch")) == 1
     assert colours("baseline").isdisjoint(colours("launch") | colours("true"))
+    # nor does a speed take the colour that stands for the second launch or the true torque
+    speeds = {line.get_color() for line in fig.axes[3].get_lines()}
+    assert speeds.isdisjoint(colours("baseline") | colours("true"))
     # every panel's lines say whose they are
     assert all(any("launch" in line.get_label() for line in ax.get_lines()) for ax in fig.axes[:4])
     title = fig._suptitle.get_text()

@@ -114,8 +114,9 @@ def plot_launch(signals: pd.DataFrame, truth: pd.DataFrame, summary: dict, path:
     if extra is not None:
         axes[2].plot(extra["time"], extra["u"], lw=0.8, alpha=0.8, color=theirs, label=f"u, {extra_label}")
     axes[2].set_title("Valve input [V]", fontsize=10, loc="left")
-    for c in ("omega_p", "omega_1", "omega_s"):
-        axes[3].plot(t, signals[c], lw=0.8, label=f"{c}, {name}")
+    # colours of their own: orange and green stand for the second launch and the true torque above
+    for c, colour in (("omega_p", "tab:blue"), ("omega_1", "tab:purple"), ("omega_s", "tab:brown")):
+        axes[3].plot(t, signals[c], lw=0.8, color=colour, label=f"{c}, {name}")
     axes[3].set_title("Speeds [rad/s]", fontsize=10, loc="left")
     if heat:
         axes[4].plot(truth["time"], truth["T_plate"], lw=1.0, label="T_plate true")
