@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from wetclutch.errors import SimulationError
 from wetclutch.sim import workspace as engine
 from wetclutch.sim.network import GROUND, Network, integrate
 from wetclutch.sim.signals import Ramp, Sine, Step
@@ -235,3 +236,16 @@ def test_one_way_clutch_holds_one_way_without_limit_and_the_other_up_to_its_fric
         assert _release_times(tr, "owc")[0] == pytest.approx(t_break, abs=1e-9)
         assert wb[-1] == pytest.approx((k * (1.0 - t_break**2) / 2.0 - C * (1.0 - t_break)) / Jb, rel=1e-9)
     assert tr.energy_residual() < 1e-9
+
+
+def test_constraints_the_engine_cannot_reconcile_are_named_as_such_not_as_a_missing_inertia():
+    # a lossy gear beside a locked clutch between two bodies with inertia: what the engine refuses is the pair of
+    # constraints (the gear's efficiency against the clutch's rigid tie), not a body without inertia
+    net = Network()
+    b1, b2 = net.body("b1", 1.0, w0=5.0), net.body("b2", 1.0, w0=5.0)
+    net.gear("g", b1, b2, 1.0, 0.9)
+    net.clutch("c", b1, b2, 5.0)
+    net.source("d", b1, 3.0)
+    with pytest.raises(SimulationError, match="the locks and gears on body 'b[12]' admit no single motion") as err:
+        integrate(net, 1.0)
+    assert "no inertia" not in str(err.value)
