@@ -123,8 +123,8 @@ def _jsonable(v: Any) -> Any:
 def write_csv(frame: Any, path: Path, digits: int = 10) -> None:
     """Write a numeric ``frame`` (pandas DataFrame) as CSV with ``digits`` significant digits, as
     ``frame.to_csv(path, index=False, float_format=f"%.{digits}g")`` does, in a quarter of its time: one format
-    string per row, not one call per value (a rig run's 1 M rows of true states took 16 s). A frame with missing
-    values goes through pandas, which leaves their cells empty."""
+    string per row, not one call per value (a rig run's 1 M rows of true states: 16 s through pandas, 4 s here).
+    A frame with missing values goes through pandas, which leaves their cells empty."""
     values = frame.to_numpy(dtype=np.float64)
     if np.isnan(values).any():
         frame.to_csv(path, index=False, float_format=f"%.{digits}g")
