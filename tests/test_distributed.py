@@ -70,3 +70,23 @@ def test_unreachable_scheduler_is_a_one_line_error(tmp_path, capsys, monkeypatch
     err = capsys.readouterr().err
     assert code == 2
     assert err.startswith("wetclutch: error: --scheduler") and err.count("\n") == 1
+
+
+def test_a_server_that_is_no_dask_scheduler_is_a_one_line_error_not_a_hang(monkeypatch):
+    # a web server accepts the connection and waits for a request: the dask client would wait for its handshake
+    # past its own timeout (a verification hung for minutes)
+    import socket
+    import threading
+
+    monkeypatch.setattr(distributed, "CONNECT_TIMEOUT_S", 1)
+    server = socket.create_server(("127.0.0.1", 0))
+    port = server.getsockname()[1]
+    accepted = []
+    threading.Thread(target=lambda: accepted.append(server.accept()), daemon=True).start()
+    try:
+        with pytest.raises(WetclutchError, match="no dask scheduler answers at .* sent no dask handshake"):
+            distributed.connect(f"tcp://127.0.0.1:{port}", "--scheduler")
+    finally:
+        for conn, _ in accepted:
+            conn.close()
+        server.close()

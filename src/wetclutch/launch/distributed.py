@@ -17,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import socket
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -55,6 +56,27 @@ def _source(address: str) -> str:
     return ENV_SCHEDULER if os.environ.get(ENV_SCHEDULER, "").strip() == address else "--scheduler"
 
 
+def _greets(address: str) -> bool:
+    """Whether a server at a ``tcp://`` ``address`` that accepts a connection sends something first, as a dask
+    scheduler sends its handshake at once. Another server (a web server waits for a request) would leave the client
+    waiting for a reply that never comes, past its own timeout. True where this cannot tell (another protocol, no
+    connection: the client's own error says why)."""
+    from distributed.comm import parse_address, parse_host_port
+
+    try:
+        scheme, location = parse_address(address)
+        if scheme != "tcp":
+            return True
+        host, port = parse_host_port(location)
+        with socket.create_connection((host, port), timeout=CONNECT_TIMEOUT_S) as sock:
+            sock.settimeout(CONNECT_TIMEOUT_S)
+            return bool(sock.recv(1))
+    except TimeoutError:
+        return False
+    except (OSError, ValueError, TypeError):
+        return True
+
+
 def connect(address: str, source: str | None = None) -> Any:
     """A client of the scheduler at ``address``; a one-line error if it cannot be reached.
 
@@ -83,6 +105,9 @@ def connect(address: str, source: str | None = None) -> Any:
         raise WetclutchError(f"{source} needs dask.distributed installed ({e})") from None
     # made apart from its start, so that a client whose start fails can still be closed here: left to its
     # finalizer, it waits for its event loop at exit and prints a traceback long after the error
+    if not _greets(address):
+        raise WetclutchError(f"{source}: no dask scheduler answers at {address!r} (a server there accepted the "
+                             f"connection but sent no dask handshake within {CONNECT_TIMEOUT_S} s)")
     client = Client.__new__(Client)
     try:
         client.__init__(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
