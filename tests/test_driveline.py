@@ -8,6 +8,7 @@ from scipy.linalg import expm
 from scipy.optimize import brentq
 
 import wetclutch as wc
+from wetclutch.errors import WetclutchError
 from wetclutch.plant import driveline
 from wetclutch.sim.network import integrate
 from wetclutch.sim.signals import Step
@@ -100,3 +101,19 @@ def test_result_columns(engage_default):
     assert set(engage_default.signals.locked.unique()) <= {0, 1}
     assert engage_default.signals.time.iloc[-1] == pytest.approx(8.0)
     assert np.allclose(np.diff(engage_default.signals.time), 1e-3)
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"rtol": "1e-6"}, "rtol must be a number"), ({"t_end": "1 s"}, "t_end must be a number"),
+    ({"t_end": 0}, "t_end must be > 0"), ({"rtol": -1}, r"rtol must be in \(0, 1\)"), ({"h_max": 0}, "h_max"),
+    ({"solver": "bdf"}, "unknown option 'solver'")])
+def test_simulate_refuses_bad_options_in_one_line(kwargs, message):
+    # before the compiled core: a string would fail there only after its compilation, as a typing error
+    with pytest.raises(WetclutchError, match=message):
+        wc.simulate("engage", **kwargs)
+
+
+def test_simulate_refuses_a_table_for_a_parameter_set():
+    with pytest.raises(WetclutchError, match="params must be a parameter set"):
+        wc.simulate("engage", {"driveline.ratio": 0.6})
+    assert wc.simulate("engage", t_end=np.float64(1.0), rtol=np.float32(1e-6)).summary["t_sync"] is None
