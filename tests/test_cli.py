@@ -339,3 +339,14 @@ def test_tune_resume_with_other_settings_is_refused_and_cma_says_nothing(tmp_pat
                 "(--samples: 4 in the state, 6 now)", tmp_path / "never")
     cli_refuses(["tune", "--samples", "4", "--popsize", "3", "--generations", "3", *small],
                 "(--popsize: 2 in the state, 3 now)", tmp_path / "never")
+
+
+def test_a_rig_run_whose_plates_never_touch_says_so(tmp_path, capsys):
+    # a 1 V step on a clutch whose kiss point is 0.9 bar: identification would find no onset in it
+    assert main(["rig", "step", "--t-end", "2", "--set", "hydraulics.p_prestress=90000",
+                 "--out", str(tmp_path / "weak")]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("warning: the clutch plates never touched (clutch pressure at most 0.9")
+    assert "higher --level" in err and err.count("\n") == 1
+    assert main(["rig", "step", "--t-end", "2", "--out", str(tmp_path / "default")]) == 0
+    assert capsys.readouterr().err == ""

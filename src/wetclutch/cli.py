@@ -142,6 +142,11 @@ def _cmd_rig(args: argparse.Namespace) -> None:
     m = res.measured
     extra = f"; t_sync = {res.meta['t_sync']:.3f} s" if res.meta["t_sync"] is not None else ""
     print(f"rig {args.experiment}: {len(m)} samples at {args.rate:g} Hz, {m.time.iloc[-1]:.2f} s -> {args.out}{extra}")
+    if args.config == "clutch" and not float(res.truth["T_c"].abs().max()) > 0.0:
+        # identification finds no torque onset, slip phase or ring-out in such a run, and says only "no suitable runs"
+        print(f"warning: the clutch plates never touched (clutch pressure at most "
+              f"{float(res.truth['p_clutch'].max()) / 1e5:.2f} bar): this run shows no torque; a higher --level "
+              "presses the plates", file=sys.stderr)
 
 
 def _cmd_calibration(args: argparse.Namespace) -> None:
