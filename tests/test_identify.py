@@ -822,3 +822,14 @@ def test_a_design_on_an_identification_names_identified_sources(identified):
     d = designs.design(identified.identified, "launch", identified.origin())
     assert identified.origin()["driveline.ratio"] == "identified"
     assert "identified" in d.sources["ratio"]
+
+
+def test_clutch_runs_whose_plates_never_touch_are_named_as_the_reason(tmp_path):
+    # a 1 V step on a clutch whose kiss point is 0.9 bar: the axle sees drag and noise only
+    weak = params.load(overrides={"hydraulics.p_prestress": 90000.0})
+    rig_report.write(rig.run("step", weak, oil_temp_C=41.0, seed=1, t_end=4.0), tmp_path / "weak")
+    res = ident.identify([channels.load(tmp_path / "weak" / "measured.csv")])
+    why = dict(res.sources())
+    for path in ("friction.mu_slip_poly", "hydraulics.x_contact", "driveline.k_a"):
+        assert why[path][0] == "prior" and "the input may never have pressed the plates" in why[path][1], path
+    assert "pressed the plates" not in why["valve.I_hyst"][1]

@@ -144,6 +144,7 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
     est["oil_temp_C"] = Estimate(float(np.median(temps)), float(np.std(temps)),
                                  "C (median over the clutch runs)" if clutch_runs else "C (median over the runs)",
                                  [source(r, r.t[0], r.t[-1]) for r in temp_runs])
+    _no_torque(clutch_runs, est, notes)
     identified = identified_params(prior, est, {k: v for k, (v, _) in notes.items()})
     result = Identification(list(recordings), prior, est, onsets, slips, points, steps, responses, ringings, fits, [],
                             identified, {k: why for k, (_, why) in notes.items()})
@@ -197,6 +198,32 @@ def _ratios(runs: Sequence[Recording], prior: Params, est: dict[str, Estimate],
         notes["driveline.ratio"] = (value, f"not measured, {origin} is used: the CVT input speed exceeds {W_RATIO:g} "
                                            "rad/s in too few samples for the speed sensors to give the ratio")
     return out
+
+
+#: the largest axle torque (N m) a clutch run may show and still have its plates apart (oil drag in cold oil, noise)
+OPEN_PLATES_NM = 15.0
+#: the estimates that need the plates to carry torque, and the parameters they give
+_FROM_TORQUE = {"mu_slip_poly": ("friction.mu_slip_poly", "friction.mu_scale", "friction.mu_slope"),
+                "contact_pressure_Pa": ("hydraulics.x_contact",), "resonance_Hz": ("driveline.k_a",),
+                "damping_ratio": ("driveline.d_a",)}
+
+
+def _no_torque(runs: Sequence[Recording], est: dict[str, Estimate], notes: dict[str, tuple[Any, str]]) -> None:
+    """Where no clutch run shows torque (the input never pressed the plates), say so for the parameters that need
+    it, instead of the bare "no suitable runs"."""
+    if not runs or any("T_r" not in r.data for r in runs):
+        return
+    peak = max(float(np.max(np.abs(r.data["T_r"]))) for r in runs)
+    # what the open plates' oil drag and the sensor's noise reach on their own; a clutch that engages carries tens
+    # of N m or more
+    if peak > OPEN_PLATES_NM:
+        return
+    why = (f"no clutch run shows the plates' torque (|T_r| at most {peak:.2g} N m, what drag and noise give): the "
+           "input may never have pressed the plates; a command step to a higher input does")
+    for key, paths in _FROM_TORQUE.items():
+        if key not in est:
+            for path in paths:
+                notes.setdefault(path, (None, why))
 
 
 def _inertias(fits: Sequence[InertiaFit], runs: Sequence[Recording], est: dict[str, Estimate],
