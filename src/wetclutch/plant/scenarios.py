@@ -149,16 +149,18 @@ def simulate(scenario: str, params: Params | None = None, t_end: float | None = 
         raise WetclutchError(f"unknown option '{sorted(unknown)[0]}' (choose from {', '.join(SOLVER_OPTIONS)})")
     if params is not None and not isinstance(params, Params):
         raise WetclutchError(f"params must be a parameter set (wetclutch.load_params(...)), not {type(params).__name__}")
-    given = {"t_end": t_end, **options}
-    for name, value in given.items():
-        # a string or an array would reach the compiled core and fail there, after its compilation, as a typing error
-        if value is not None and name != "atol" and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
-            raise WetclutchError(f"{name} must be a number (got {value!r})")
     sc = SCENARIOS[scenario]
+    given = {"t_end": sc.t_end if t_end is None else t_end, **options}
+    for name, value in given.items():
+        # atol may be one per state; a string or an array elsewhere would reach the compiled core and fail there,
+        # after its compilation, as a typing error
+        if name != "atol":
+            if isinstance(value, bool) or not isinstance(value, numbers.Real):
+                raise WetclutchError(f"{name} must be a number (got {value!r})")
+            given[name] = float(value)
     p = params if params is not None else Params()
     try:
-        tr = integrate(sc.build(p), sc.t_end if t_end is None else float(t_end),
-                       **{k: float(v) if k != "atol" else v for k, v in options.items()})
+        tr = integrate(sc.build(p), **given)
     except ValueError as e:  # the engine's check of a tolerance, step or time
         raise WetclutchError(str(e)) from None
     return Result(sc.name, sc.frame(tr), sc.summary(tr), p, tr)

@@ -338,7 +338,7 @@ def read_measurement(path: str | Path) -> tuple[pd.DataFrame, dict[str, str]]:
     DataFrame
         ``time`` first, then the channels as float64.
     dict of str to str
-        Unit per channel, as far as the file records them (none for CSV).
+        Unit per channel, as far as the file records them (for a CSV, its unit row if it has one).
 
     Raises
     ------

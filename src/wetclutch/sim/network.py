@@ -33,7 +33,7 @@ from ..physics import thermal as th_mod
 from . import coldstart
 from . import workspace as wsp
 from .integrator import advance
-from .signals import KIND, SINE, SN_FREQ, Signal, as_signal, compile_signals
+from .signals import Signal, as_signal, compile_signals, sine_step_limit
 
 GROUND = -1
 
@@ -574,17 +574,6 @@ def failure(network: Network, ws: wsp.Workspace, status: int) -> SimulationError
 def outputs(n: int, nx: int, naux: int, nc: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Empty output buffers for ``n`` rows: times, states, element torques, clutch modes."""
     return np.zeros(n), np.zeros((n, nx)), np.zeros((n, naux)), np.zeros((n, nc), dtype=np.int64)
-
-
-#: steps per period of a network's fastest sine signal, by default (:func:`integrate`)
-SINE_STEPS = 10
-
-
-def sine_step_limit(sig: np.ndarray) -> float:
-    """The largest step (s) :func:`integrate` takes by default on a network whose compiled signal table is ``sig``:
-    a :data:`SINE_STEPS`-th of the shortest sine period, or no limit without sines."""
-    freq = [abs(row[SN_FREQ]) for row in sig if int(row[KIND]) == SINE and row[SN_FREQ] != 0.0]
-    return 1.0 / (SINE_STEPS * max(freq)) if freq else np.inf
 
 
 def integrate(

@@ -168,6 +168,17 @@ def as_signal(value: Signal | float) -> Signal:
     return value
 
 
+#: steps per period of a network's fastest sine signal, by default (:func:`sine_step_limit`)
+SINE_STEPS = 10
+
+
+def sine_step_limit(sig: np.ndarray) -> float:
+    """The largest step (s) :func:`wetclutch.sim.network.integrate` takes by default on a network whose compiled
+    signal table is ``sig``: a :data:`SINE_STEPS`-th of the shortest sine period, or no limit without sines."""
+    freq = [abs(row[SN_FREQ]) for row in sig if int(row[KIND]) == SINE and row[SN_FREQ] != 0.0]
+    return 1.0 / (SINE_STEPS * max(freq)) if freq else np.inf
+
+
 def compile_signals(signals: list[Signal]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Flatten signals into ``(rows, table, breakpoints, ext)`` arrays for the core."""
     rows = np.zeros((max(len(signals), 1), ROW))
