@@ -239,13 +239,15 @@ def test_one_way_clutch_holds_one_way_without_limit_and_the_other_up_to_its_fric
 
 
 def test_constraints_the_engine_cannot_reconcile_are_named_as_such_not_as_a_missing_inertia():
-    # a lossy gear beside a locked clutch between two bodies with inertia: what the engine refuses is the pair of
-    # constraints (the gear's efficiency against the clutch's rigid tie), not a body without inertia
+    # a lossy gear whose ratio moves, beside a locked clutch between two bodies with inertia: its velocity term is a
+    # constraint of its own that the clutch does not imply; what the engine refuses is that pair of constraints,
+    # not a body without inertia
     net = Network()
     b1, b2 = net.body("b1", 1.0, w0=5.0), net.body("b2", 1.0, w0=5.0)
-    net.gear("g", b1, b2, 1.0, 0.9)
+    net.gear("g", b1, b2, 1.0, 0.9, rate=0.1, ratio_range=(0.5, 2.0))
     net.clutch("c", b1, b2, 5.0)
     net.source("d", b1, 3.0)
     with pytest.raises(SimulationError, match="the locks and gears on body 'b[12]' admit no single motion") as err:
         integrate(net, 1.0)
     assert "no inertia" not in str(err.value)
+    assert "ratio moves" in str(err.value)

@@ -2,8 +2,9 @@
 
 At an event the modes are re-decided from the state (:func:`settle`): a clutch at zero
 slip is tried locked, the locked clutch most beyond its static capacity is released in
-the direction of its constraint torque, gears are set by the direction of power flow
-and stick at standstill while their friction bounds hold. Newly locked pairs are
+the direction of its constraint torque, lossy gears are set by the direction of power flow
+and stick at standstill while their friction bounds hold (an ideal gear has no modes), and a
+lossy gear whose constraint the locks beside it already hold carries no torque (:func:`_evaluate`). Newly locked pairs are
 projected onto their inertia-weighted common speed; a moving ratio is put back within its
 limits (an event leaves it a rounding beyond) and its gear's speeds onto ``w_out = r w_in``
 (the integrator keeps that constraint at the acceleration level, where a moving ratio lets
@@ -18,8 +19,8 @@ from ..physics import actuator as act_
 from . import signals
 from .compiled import jit, jit_inline
 from .rhs import LIM_MAX, LIM_MIN, capacity, hold_margins, rate_command, ratio, rhs_call, slip, static_limit
-from .workspace import (FREE, FS_AMP, FS_PISTON, FS_PLAY_CUR, FS_PLAY_DIR, FS_PLAY_G, FS_PLAY_TAU, IS_REDUNDANT,
-                        LOCKED, NO_MODE, STUCK, aux_offsets, fs_grip, fs_ratio)
+from .workspace import (FREE, FS_AMP, FS_PISTON, FS_PLAY_CUR, FS_PLAY_DIR, FS_PLAY_G, FS_PLAY_TAU, IDLE, IS_BAD_BODY,
+                        IS_REDUNDANT, LOCKED, NO_MODE, STUCK, aux_offsets, fs_grip, fs_ratio)
 
 
 @jit_inline
@@ -59,7 +60,8 @@ def forget(fact):
 
 @jit_inline
 def _first_guess(t, x, net, ext, clm, grm):
-    """Modes from the state alone: clutches by capacity and slip, gears stuck at standstill."""
+    """Modes from the state alone: clutches by capacity and slip, lossy gears stuck at standstill (an ideal gear
+    has no modes: its constraint is the same whichever way power flows, and it has no friction to stick with)."""
     nc = net.cl_a.shape[0]
     ng = net.gr_in.shape[0]
     t_right = t + 1e-9 * max(1.0, abs(t))
@@ -88,7 +90,9 @@ def _first_guess(t, x, net, ext, clm, grm):
     for k in range(ng):
         i_in = net.gr_in[k]
         o = net.gr_out[k]
-        if abs(x[o]) <= 1e-8 * w_scale and abs(x[i_in]) <= 1e-8 * w_scale:
+        if net.gr_eta[k] == 1.0:
+            grm[k] = 1
+        elif abs(x[o]) <= 1e-8 * w_scale and abs(x[i_in]) <= 1e-8 * w_scale:
             grm[k] = STUCK
         elif abs(grm[k]) == STUCK:
             grm[k] = 1
@@ -160,13 +164,20 @@ def _onto_ratio(x, net, k, r):
 
 
 @jit_inline
-def _gear_modes(x, dx, aux, net, grm, released):
-    """Release a stuck gear whose bounds fail, or turn a gear whose power flows the other way; True if one changed."""
+def _gear_modes(x, dx, aux, net, grm, released, redundant):
+    """Release a stuck gear whose bounds fail, or turn a gear whose power flows the other way; True if one changed.
+
+    A gear released from standstill keeps the direction its bounds gave while it is still at rest (no cycling),
+    unless it was one of redundant locks (``redundant``): its share of their least-norm distribution, hence the
+    direction its bounds give, is one of many, and the power flow, once the motion is decided, sets it."""
     nc = net.cl_a.shape[0]
     ng = net.gr_in.shape[0]
     _, _, o_gear_out, _, o_gear_in = aux_offsets(nc, ng, net.sp_k.shape[0])
     changed = False
     for k in range(ng):
+        if net.gr_eta[k] == 1.0 or abs(grm[k]) == IDLE:
+            # no modes (an ideal gear), or no torque (an idle one: the locks beside it decide)
+            continue
         o = net.gr_out[k]
         lam = aux[o_gear_out + k]
         if abs(grm[k]) == STUCK:
@@ -180,7 +191,7 @@ def _gear_modes(x, dx, aux, net, grm, released):
                 grm[k] = 1  # the input side drives the output
             else:
                 continue
-            released[nc + k] = 1
+            released[nc + k] = 0 if redundant else 1
             return True
         p = lam * (x[o] if x[o] != 0.0 else dx[o])
         if grm[k] * p < 0.0 and not (released[nc + k] != 0 and x[o] == 0.0):
@@ -242,6 +253,78 @@ def _lock_backsliding(x, dx, net, clm, released):
 
 
 @jit_inline
+def _implied(G, x, net, k):
+    """Whether gear ``k``'s constraint ``a_out = r a_in`` holds under the solution operator ``G`` whatever the
+    body torques: the other constraints imply it."""
+    nb = net.J.shape[0]
+    r = ratio(x, net, k)
+    i_in = net.gr_in[k]
+    o = net.gr_out[k]
+    g_max = 0.0
+    for i in range(nb):
+        for c in range(nb):
+            g_max = max(g_max, abs(G[i, c]))
+    for c in range(nb):
+        if abs(G[o, c] - r * G[i_in, c]) > 1e-9 * g_max:
+            return False
+    return True
+
+
+@jit
+def _evaluate(t, x, net, ext, ws):
+    """The right-hand side of the modes being decided (into ``ws.dx``, ``ws.aux``); False if the motion is not
+    determined.
+
+    A lossy gear whose constraint the locks and gears beside it already hold (beside a locked clutch, or in
+    parallel with another gear) leaves the motion open: its torque splits the load with them, and its loss,
+    hence the acceleration, depends on the split. Of the splits within every element's limits the engine takes
+    the one in which such gears carry no torque (:data:`~wetclutch.sim.workspace.IDLE`; a redundant lossy gear
+    is idled in turn until the motion is determined, each kept idle only if the others imply its constraint).
+    The locks then carry the load as without the gear; where that is more than a clutch holds, the clutch gives
+    way (:func:`_release_worst`), the gear's constraint is its own again, and it carries what the clutch's
+    sliding torque does not, with its loss. Idling is decided afresh at each evaluation here, so a gear that
+    idled stands in once the locks beside it let go.
+
+    A real call: it runs at mode decisions only, and compiled once it keeps the right-hand side's call sites out
+    of :func:`settle`."""
+    clm = ws.clm
+    grm = ws.grm
+    for k in range(grm.shape[0]):
+        if abs(grm[k]) == IDLE:
+            grm[k] = 1 if grm[k] > 0 else -1
+    if rhs_call(t, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm), bool(True)):
+        return True
+    forget(ws.fact)
+    bad = ws.istate[IS_BAD_BODY]
+    idled = False
+    for k in range(grm.shape[0]):
+        # only a lossy gear of constant ratio (a moving ratio's velocity term is its own constraint)
+        if abs(grm[k]) != 1 or net.gr_eta[k] == 1.0 or net.gr_state[k] >= 0:
+            continue
+        grm[k] *= IDLE
+        idled = True
+        if rhs_call(t, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm), bool(True)):
+            implied = True
+            for i in range(grm.shape[0]):
+                if abs(grm[i]) == IDLE and not _implied(ws.G, x, net, i):
+                    implied = False
+            if implied:
+                return True
+            # determined, but not by the locks beside it: this gear's constraint was its own
+            forget(ws.fact)
+            grm[k] = 1 if grm[k] > 0 else -1
+        else:
+            # still open: keep it idle and try the next one as well
+            forget(ws.fact)
+    if idled:
+        for k in range(grm.shape[0]):
+            if abs(grm[k]) == IDLE:
+                grm[k] = 1 if grm[k] > 0 else -1
+    ws.istate[IS_BAD_BODY] = bad
+    return False
+
+
+@jit_inline
 def input_modes(t, net, ext, ws):
     """The valve amplifier's mode and the direction of its coil current (the magnet's play's flow from here on),
     from the state and the valve's input alone."""
@@ -277,8 +360,7 @@ def settle(t, net, ext, ws):
     for _ in range(4 * (nc + ng) + 4):
         _project(x, net, clm, grm)
         _hold_ratios(t, x, net, ext, ws.fstate)
-        if not rhs_call(t, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm), bool(True)):
-            forget(ws.fact)
+        if not _evaluate(t, x, net, ext, ws):
             return -1
         redundant_now = ws.istate[IS_REDUNDANT] != 0
         redundant = redundant or redundant_now
@@ -289,7 +371,7 @@ def settle(t, net, ext, ws):
         changed = False
         for phase in range(3):
             if phase == 1:
-                if _gear_modes(x, ws.dx, ws.aux, net, grm, released):
+                if _gear_modes(x, ws.dx, ws.aux, net, grm, released, redundant_now):
                     if redundant:
                         # a gear at its bound changes the shares: a clutch that gave way may hold again
                         for j in range(nc):

@@ -563,8 +563,8 @@ def failure(network: Network, ws: wsp.Workspace, status: int) -> SimulationError
         if 0 <= k < len(network.bodies) and network.bodies[k].J > 0.0:
             # a body with inertia is determined by itself: what leaves its motion open is the constraints on it
             msg = (f"{msg} at t = {ws.fstate[wsp.FS_T]:.6g} s: the locks and gears on {who} admit no single motion "
-                   "(two paths between the same bodies, such as a lossy gear beside a locked clutch or two gears "
-                   "in parallel, whose constraints the engine cannot reconcile in their present modes)")
+                   "(two paths between the same bodies whose constraints the engine cannot reconcile in their present "
+                   "modes: a lossy gear whose ratio moves, beside a locked clutch or another gear)")
         else:
             msg = (f"{msg} at t = {ws.fstate[wsp.FS_T]:.6g} s: {who} has no inertia and no lock, gear or "
                    "other body with inertia holds it (give it an inertia, or tie it rigidly)")

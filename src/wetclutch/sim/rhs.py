@@ -36,8 +36,8 @@ from . import signals
 from .compiled import jit, jit_inline
 from .linalg import lu_factor, lu_solve, svd_jacobi
 from .workspace import (E_DAMPER, E_DRAG, E_GEAR, E_SOURCE, FACTOR_CACHE, FREE, FS_AMP, FS_AMP_G, FS_PISTON,
-                        FS_PLAY_CUR, FS_PLAY_DIR, FS_PLAY_G, FS_PLAY_TAU, IS_BAD_BODY, IS_CACHE_NEXT, IS_REDUNDANT,
-                        LOCKED, STUCK, aux_offsets, fs_grip, fs_ratio)
+                        FS_PLAY_CUR, FS_PLAY_DIR, FS_PLAY_G, FS_PLAY_TAU, IDLE, IS_BAD_BODY, IS_CACHE_NEXT,
+                        IS_REDUNDANT, LOCKED, STUCK, aux_offsets, fs_grip, fs_ratio)
 
 # columns of NetArrays.gr_lim: a moving ratio's limits and its rate limit (1/s)
 LIM_MIN, LIM_MAX, LIM_RATE = 0, 1, 2
@@ -231,6 +231,11 @@ def _build_constraints(net, x, clm, grm, A, o, n):
             A[o + col + 1, i_in] = 1.0
             col += 2
             continue
+        if abs(grm[g]) == IDLE:
+            # no torque (its row: lam = 0) and no constraint of its own: the locks beside it hold it
+            A[o + col, col] = 1.0
+            col += 1
+            continue
         c = 1.0 / net.gr_eta[g] if grm[g] > 0 else net.gr_eta[g]
         r = ratio(x, net, g)
         A[o + i_out, col] -= 1.0
@@ -243,8 +248,8 @@ def _build_constraints(net, x, clm, grm, A, o, n):
 @jit_inline
 def _gear_row(net, clm, grm, g):
     """The row of gear ``g``'s velocity constraint in the constraint matrix (-1: a stuck gear, whose rows hold
-    its flanges at rest and have no velocity term)."""
-    if abs(grm[g]) == STUCK:
+    its flanges at rest and have no velocity term, or an idle one, which has no constraint row)."""
+    if abs(grm[g]) == STUCK or abs(grm[g]) == IDLE:
         return -1
     row = net.J.shape[0]
     for j in range(net.cl_a.shape[0]):
@@ -324,8 +329,10 @@ def _least_norm_constraints(net, x, clm, grm, A, G, n, istate):
     the constraint torques are not. The solution operator is the pseudo-inverse (from a
     Jacobi SVD in the spare rows of ``A``), which picks, of all torque distributions that
     give the motion, the one of least Euclidean norm. A null vector that moves a body means
-    the motion itself is undetermined (a body without inertia that nothing holds): False,
-    with that body in ``istate[IS_BAD_BODY]``.
+    the motion itself is undetermined: False, with that body in ``istate[IS_BAD_BODY]``. A body
+    without inertia that nothing holds is named before one with inertia: only a lossy gear's loss
+    against a lock beside it leaves a body with inertia open, which the mode decision resolves
+    (:func:`wetclutch.sim.modes._evaluate`), so what it cannot resolve is the massless body.
     """
     nb = net.J.shape[0]
     nm = A.shape[1]
@@ -339,17 +346,23 @@ def _least_norm_constraints(net, x, clm, grm, A, G, n, istate):
         s_max = max(s_max, A[o_s, j])
     tol = 1e-11 * s_max
     istate[IS_BAD_BODY] = -1
+    worst = -1
+    w_max = 1e-8
+    massless = -1
+    m_max = 1e-8
     for j in range(n):
         if A[o_s, j] <= tol:
-            worst = -1
-            w_max = 1e-8
             for k in range(nb):
-                if abs(A[o_v + k, j]) > w_max:
-                    w_max = abs(A[o_v + k, j])
+                v = abs(A[o_v + k, j])
+                if v > w_max:
+                    w_max = v
                     worst = k
-            if worst >= 0:
-                istate[IS_BAD_BODY] = worst
-                return False
+                if net.J[k] == 0.0 and v > m_max:
+                    m_max = v
+                    massless = k
+    if worst >= 0:
+        istate[IS_BAD_BODY] = massless if massless >= 0 else worst
+        return False
     for c in range(G.shape[1]):
         # body torque c, or (moving ratios) the velocity term of gear c - nb, in its row
         src = c if c < nb else _gear_row(net, clm, grm, c - nb)
@@ -401,6 +414,11 @@ def _constraint_torques(x, net, clm, grm, z, aux):
         if abs(grm[g]) == STUCK:
             aux[o_gear_in + g] = z[col + 1]
             col += 2
+            continue
+        if abs(grm[g]) == IDLE:
+            aux[o_gear_out + g] = 0.0
+            aux[o_gear_in + g] = 0.0
+            col += 1
             continue
         c = 1.0 / net.gr_eta[g] if grm[g] > 0 else net.gr_eta[g]
         p_gear += lam * x[net.gr_out[g]] * (c - 1.0)
@@ -580,6 +598,12 @@ def events(x, aux, net, clm, grm, g, fstate):
         lam = aux[2 * nc + k]
         if abs(grm[k]) == STUCK:
             g[2 * nc + 2 * k], g[2 * nc + 2 * k + 1] = hold_margins(aux, x, net, grm, k)
+        elif net.gr_eta[k] == 1.0 or abs(grm[k]) == IDLE:
+            # an ideal gear's power flow ends no mode (both directions are the same constraint: a gear whose
+            # torque and speed are zero at once, at a standstill, would switch by rounding, over and over);
+            # an idle gear's torque is zero, and the locks beside it end its mode
+            g[2 * nc + 2 * k] = 1.0
+            g[2 * nc + 2 * k + 1] = 1.0
         else:
             g[2 * nc + 2 * k] = grm[k] * lam * x[net.gr_out[k]]
             g[2 * nc + 2 * k + 1] = 1.0

@@ -25,6 +25,11 @@ FREE, LOCKED, UNDECIDED = 0, 2, 99
 NO_MODE = -99
 #: a gear held at standstill (+3 / -3: sign of the held output torque); +1 / -1: power flowing forward / back
 STUCK = 3
+#: a lossy gear that carries no torque (+2 / -2: the power flow it had): the locks and gears beside it hold its
+#: constraint already (a lossy gear beside a locked clutch, two lossy gears in parallel), so its torque is not
+#: determined, and this one of the distributions within every element's limits loses no power in it. Decided
+#: afresh at each mode decision (:func:`wetclutch.sim.modes.settle`); an ideal gear has no modes at all (it stays +1)
+IDLE = 2
 
 # status codes returned by the core
 OK, ERR_SINGULAR, ERR_ZENO = 0, 1, 2
@@ -138,7 +143,7 @@ class Workspace(NamedTuple):
 
     x: np.ndarray  # current state
     clm: np.ndarray  # clutch modes
-    grm: np.ndarray  # gear modes (+1 forward, -1 backward, +-STUCK held at standstill)
+    grm: np.ndarray  # gear modes (+1 forward, -1 backward, +-STUCK held at standstill, +-IDLE carrying nothing)
     fstate: np.ndarray  # (N_FSTATE + 3 nc + 3 ng,) see FS_*, fs_ratio and fs_grip
     istate: np.ndarray  # (N_ISTATE,) see IS_*
     K: np.ndarray  # (7, nx) stages
