@@ -125,11 +125,12 @@ def test_bad_profile_files_are_one_line_errors(tmp_path, content):
     assert "\n" not in str(e.value)
 
 
-@pytest.mark.parametrize("kwargs, field", [({"t_ref": -5.0}, "--t-ref"), ({"oil_temp_C": 400.0}, "--oil-temp"),
-                                           ({"profile": "zigzag"}, "--profile"), ({"noise_scale": -1.0}, "--noise-scale"),
+@pytest.mark.parametrize("kwargs, field", [({"t_ref": -5.0}, "t_ref"), ({"oil_temp_C": 400.0}, "oil_temp_C"),
+                                           ({"profile": "zigzag"}, "profile"), ({"noise_scale": -1.0}, "noise_scale"),
                                            ({"rtol": 0.0}, "rtol"), ({"rtol": 0.1}, "rtol")])
 def test_bad_conditions_name_the_field(kwargs, field):
-    with pytest.raises(WetclutchError, match=field):
+    # from Python the field's name (the command line names its options: test_cli)
+    with pytest.raises(WetclutchError, match=f"^{field} "):
         launch.Conditions(**kwargs).checked()
 
 

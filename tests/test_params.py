@@ -299,7 +299,7 @@ def test_a_section_changed_in_place_is_checked_too():
     p = wc.Params()
     with pytest.raises(ValueError, match="driveline.ratio_max"):
         p.driveline.ratio_min = 3.0
-    with pytest.raises(ValueError, match="float_type"):
+    with pytest.raises(pm.ParameterError, match=r"^parameter 'driveline.ratio': must be a number \(got true\)$"):
         p.driveline.ratio = True
     assert p.driveline.ratio_min == 0.4 and p.driveline.ratio == 0.5
 
@@ -312,3 +312,10 @@ def test_overrides_take_numpy_arrays_tuples_and_numbers():
     assert pm.load(overrides={"friction.mu_slip_poly": tuple(coef)}).friction.mu_slip_poly == coef.tolist()
     with pytest.raises(pm.ParameterError, match=r"friction.mu_slip_poly.0.: must be a number"):
         pm.load(overrides={"friction.mu_slip_poly": np.array([True, False])})
+
+
+def test_a_parameter_file_with_a_byte_order_mark_loads(tmp_path):
+    # Windows editors (Notepad) start a UTF-8 file with a byte-order mark, which TOML's parser takes for a statement
+    f = tmp_path / "bom.toml"
+    f.write_bytes(b"\xef\xbb\xbf[driveline]\nratio = 0.6\n")
+    assert pm.load(f).driveline.ratio == 0.6

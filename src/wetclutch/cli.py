@@ -8,19 +8,24 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import shlex
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 from pathlib import Path
 from typing import NoReturn
 
 from . import params as params_mod
-from .errors import WetclutchError
-from .output import check_target
+from .errors import COMMAND_LINE, WetclutchError
+from .output import check_out_dir, check_target
 from .plant.scenarios import SCENARIOS, simulate
 from .report.text import plural
 
 EXIT_USAGE = 2
+#: the exit code of a run stopped by a signal: 128 + the signal's number, as a shell reports it
+EXIT_SIGNAL = 128
 #: the most output samples of ``simulate``: --t-end / --dt-out
 MAX_SAMPLES = 1_000_000
 
@@ -211,24 +216,30 @@ def _cmd_design(args: argparse.Namespace) -> None:
 
 
 def _cmd_launch(args: argparse.Namespace) -> None:
+    import numpy as np
+
     from .launch import loop as launch
     from .report import launch as launch_report
 
     if args.hold_time is not None and not args.post_sync_hold:
         raise WetclutchError("--hold-time needs --post-sync-hold (it limits that hold)")
-    p, origin = _plant(args)
-    d = _design(args, p, origin)
-    if args.adaptation and d.kind == "baseline":
-        raise WetclutchError("--adaptation: the baseline controller has no adaptation")
     from .launch import adaptation
 
     if args.t_ref is not None and args.profile not in launch.PROFILES:
         raise WetclutchError(f"--t-ref: the profile '{args.profile}' gives the request itself; leave --t-ref out")
+    launch.check_sequence(args.sequence)
     cond = launch.Conditions(t_ref=100.0 if args.t_ref is None else args.t_ref, profile=args.profile,
                              oil_temp_C=args.oil_temp, seed=args.seed, noise=not args.no_noise,
                              noise_scale=args.noise_scale, post_sync_hold=args.post_sync_hold,
-                             **({} if args.hold_time is None else {"hold_time": args.hold_time}))
-    start = adaptation.load(args.adaptation) if args.adaptation else None
+                             **({} if args.hold_time is None else {"hold_time": args.hold_time})).checked()
+    # the files read before the design, which may take minutes on a new plant: a bad one is refused at once
+    launch.reference(cond, np.zeros(1))  # a CSV profile read and checked
+    p, origin = _plant(args)
+    d = _design(args, p, origin) if args.controller_file else None  # a file is read at once, a design takes long
+    if args.adaptation and (d.kind if d is not None else args.controller or "launch") == "baseline":
+        raise WetclutchError("--adaptation: the baseline controller has no adaptation")
+    start = adaptation.check_plant(adaptation.load(args.adaptation), p, args.adaptation) if args.adaptation else None
+    d = d if d is not None else _design(args, p, origin)
     runs = launch.sequence(p, d, cond, args.sequence, start)
     res = runs[-1]
     launch_report.write(res, args.out, p, runs)
@@ -263,6 +274,7 @@ def _cmd_verify(args: argparse.Namespace) -> None:
     launch.check_sequence(args.sequence)
     p, origin = _plant(args)
     rs = ranges.load(args.ranges)
+    ranges.fit(rs, p)  # a range that leaves the plant's physical range, refused before the design
     d = _design(args, p, origin)
     res = verify.run(d, p, args.samples, args.seed, args.workers, rs, progress=not args.quiet,
                      replay_args=_replay_args(args, "controller.toml"), sequence=args.sequence,
@@ -286,6 +298,7 @@ def _cmd_report(args: argparse.Namespace) -> None:
     launch.check_sequence(args.sequence)
     p, origin = _plant(args)
     rs = ranges.load(args.ranges)
+    ranges.fit(rs, p)  # a range that leaves the plant's physical range, refused before the design
     d = settings.load(args.controller_file, "launch") if args.controller_file else _design(args, p, origin, "launch")
     b = (settings.load(args.baseline_file, "baseline") if args.baseline_file
          else _design(args, p, origin, "baseline"))
@@ -309,14 +322,26 @@ def _cmd_tune(args: argparse.Namespace) -> None:
     from .report import tune as tune_report
 
     verify.check_options(args.samples, args.seed, args.workers)
+    if args.heldout_seed < 0:  # checked below as a seed, it would be named --seed
+        raise WetclutchError(f"--heldout-seed must be >= 0 (got {args.heldout_seed})")
     verify.check_options(args.heldout_samples, args.heldout_seed, args.workers, "--heldout-samples")
     tune.check_options(args.samples, args.generations, args.popsize)
     launch.check_sequence(args.sequence)
     if args.heldout_seed in (args.seed, args.seed + 1):
         raise WetclutchError("--heldout-seed must differ from --seed and --seed + 1 (the held-out plants must be other "
                              "than the training and the validation plants)")
+    if args.heldout_samples < 1:
+        # the held-out verification has no corners: without samples it has no pass rate, found only after the search
+        raise WetclutchError(f"--heldout-samples must be >= 1 (got {args.heldout_samples})")
+    if args.state is not None:
+        state = tune.check_state(args.state).resolve()
+        out = Path(args.out).resolve()
+        if state == out or out in state.parents:
+            raise WetclutchError(f"--state '{args.state}' lies inside --out '{args.out}', which is replaced as a whole "
+                                 "when the tuning ends: the state would go with it; keep it outside")
     p, origin = _plant(args)
     rs = ranges.load(args.ranges)
+    ranges.fit(rs, p)  # a range that leaves the plant's physical range, refused before the design
     start = _design(args, p, origin)
     with Progress(disable=args.quiet) as bar:
         task = bar.add_task(f"tune {start.kind}", total=args.generations)
@@ -537,15 +562,109 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: options whose files a command reads (identify's recordings are its positional ``files``); ``--adaptation`` is not
+#: among them: a launch's state carried over in place (``--adaptation DIR/adaptation.toml --out DIR``) is rewritten
+_INPUTS = ("param_file", "controller_file", "baseline_file", "ranges", "profile", "channels", "files")
+
+
+def _check_inputs_outside(args: argparse.Namespace) -> None:
+    """Refuse (one line naming the option) an input file inside ``--out``: the output replaces that directory as a
+    whole, so the input would be deleted with it (``identify runs/*/measured.mf4 --out runs`` the recordings,
+    ``design --param-file ident/params.toml --out ident`` the identification)."""
+    out = Path(args.out).resolve()
+    for name in _INPUTS:
+        value = getattr(args, name, None)
+        for f in (value if isinstance(value, list) else [value]):
+            if not f or (name == "profile" and f in ("step", "ramp")):
+                continue
+            path = Path(f).resolve()
+            if path == out or out in path.parents:
+                option = "FILE" if name == "files" else "--" + name.replace("_", "-")
+                raise WetclutchError(f"{option} '{f}' lies inside --out '{args.out}', which the output replaces as a "
+                                     "whole: it would be deleted; write the output elsewhere")
+
+
+class Interrupted(KeyboardInterrupt):
+    """A termination signal (SIGTERM, SIGHUP) taken as an interrupt, so that what is half done is cleaned up."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _on_signal(signum: int, frame: object) -> None:
+    if os.getpid() != _MAIN_PID[0]:
+        # a worker process forked from this one: it ends as the signal's default would, silently (its parent cleans up)
+        signal.signal(signum, signal.SIG_DFL)
+        os.kill(os.getpid(), signum)
+        return
+    # the workers, signalled with this process's group, die meanwhile; a process pool's thread may then trip over
+    # futures the interrupt has just cancelled (CPython's InvalidStateError): noise, not news
+    threading.excepthook = _quiet_pool_thread
+    raise Interrupted(signum)
+
+
+def _quiet_pool_thread(args: threading.ExceptHookArgs) -> None:
+    from concurrent.futures import InvalidStateError
+    from concurrent.futures.process import BrokenProcessPool
+
+    if not issubclass(args.exc_type, (InvalidStateError, BrokenProcessPool)):
+        threading.__excepthook__(args)
+
+
+#: the process whose interrupts clean up and end the command (the workers it forks inherit the handlers)
+_MAIN_PID = [0]
+#: the threads' exception hook before the command (put back after it)
+_HOOK: list = [threading.excepthook]
+
+
+def _catch_signals() -> dict[int, object]:
+    """Take SIGTERM and SIGHUP as interrupts in this process (the handlers they had, to be put back)."""
+    _MAIN_PID[0] = os.getpid()
+    _HOOK[0] = threading.excepthook
+    before = {}
+    for name in ("SIGTERM", "SIGHUP"):
+        sig = getattr(signal, name, None)
+        if sig is None:
+            continue
+        try:
+            before[sig] = signal.signal(sig, _on_signal)
+        except (ValueError, OSError):  # not the main thread: the default stays
+            pass
+    return before
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    before = _catch_signals()
+    # the errors of the calls below name the command line's options (--t-ref), not the Python arguments (t_ref)
+    token = COMMAND_LINE.set(True)
     try:
         if getattr(args, "out", None) is not None:
-            # before any work: an output that cannot replace its target is refused at once
-            check_target(args.out)
+            # before any work: an output that cannot replace its target is refused at once (export-fmu's --out is a
+            # file, checked by the export)
+            if args.command == "export-fmu":
+                check_target(args.out)
+            else:
+                check_out_dir(args.out)
+                _check_inputs_outside(args)
         args.func(args)
     except WetclutchError as err:
         print(f"wetclutch: error: {err}", file=sys.stderr)
         return EXIT_USAGE
+    except KeyboardInterrupt as err:
+        # Ctrl-C or a termination signal: what was half written is gone (outputs are written whole or not at all)
+        signum = err.signum if isinstance(err, Interrupted) else signal.SIGINT
+        out = getattr(args, "out", None)
+        print(f"wetclutch: interrupted ({signal.Signals(signum).name})"
+              + (f"; '{out}' not written" if out is not None else "")
+              + (f"; --state '{args.state}' holds the search up to its last finished generation, if any"
+                 if getattr(args, "state", None) else ""), file=sys.stderr)
+        return EXIT_SIGNAL + int(signum)
+    finally:
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
+        threading.excepthook = _HOOK[0]
+        COMMAND_LINE.reset(token)
     return 0
 

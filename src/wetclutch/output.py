@@ -49,6 +49,49 @@ def check_target(target: str | Path, option: str = "--out") -> Path:
     return path
 
 
+def check_out_dir(target: str | Path, option: str = "--out") -> Path:
+    """``target`` as an output directory that can be written, or a one-line error naming ``option``: what
+    :func:`check_target` refuses, and an existing file in its place or on its way (a file cannot become a
+    directory) or a place where no directory can be made (no permission, a read-only file system). Checked before
+    any work, so that minutes of launches do not end in it.
+
+    Raises
+    ------
+    WetclutchError
+        ``target`` cannot be an output directory.
+    """
+    path = check_target(target, option)
+    if path.exists() and not path.is_dir():
+        raise WetclutchError(f"{option} '{target}' is a file, not a directory")
+    # the nearest existing directory above it: where the temporary directory (or its parents) will be made
+    base = path.parent if str(path.parent) else Path(".")
+    while not base.exists() and base != base.parent:
+        base = base.parent
+    if not base.is_dir():
+        raise WetclutchError(f"{option} '{target}': '{base}' is a file, not a directory")
+    try:
+        Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".probe", dir=base)).rmdir()
+    except OSError as err:
+        raise WetclutchError(f"{option} '{target}': cannot create a directory in '{base}': "
+                             f"{err.strerror or err}") from None
+    return path
+
+
+def _umask() -> int:
+    """The process's file-mode creation mask: from ``/proc`` where it is there, else read by setting it and putting it
+    back (a moment in which another thread's new file would take 022)."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 @contextmanager
 def atomic_dir(target: str | Path) -> Iterator[Path]:
     """Yield a temporary directory that replaces ``target`` only if the block succeeds.
@@ -82,6 +125,8 @@ def atomic_dir(target: str | Path) -> Iterator[Path]:
     old: Path | None = None
     try:
         yield tmp
+        # a temporary directory is private (0700); the output is made as any directory would be (the umask's mode)
+        os.chmod(tmp, 0o777 & ~_umask())
         if target.is_file():
             raise WetclutchError(f"output path '{target}' is a file, not a directory")
         if target.exists():
@@ -98,14 +143,26 @@ def atomic_dir(target: str | Path) -> Iterator[Path]:
             old = None
     except OSError as err:
         shutil.rmtree(tmp, ignore_errors=True)
+        _put_back(old, target)
         raise WetclutchError(f"cannot write output '{target}': {err.strerror or err}") from None
     except BaseException:
+        # an interrupt (Ctrl-C, SIGTERM) between the two renames must not leave the previous output hidden away
         shutil.rmtree(tmp, ignore_errors=True)
+        _put_back(old, target)
         raise
     finally:
         # the previous output, if it could not be put back, stays rather than being lost
         if old is not None and not (old / "d").exists():
             shutil.rmtree(old, ignore_errors=True)
+
+
+def _put_back(old: Path | None, target: Path) -> None:
+    """Put the previous output (renamed to ``old / "d"``) back at ``target`` if the new one did not take its place."""
+    if old is not None and (old / "d").exists() and not target.exists():
+        try:
+            os.rename(old / "d", target)
+        except OSError:
+            pass  # it stays in ``old`` rather than being lost
 
 
 def _jsonable(v: Any) -> Any:

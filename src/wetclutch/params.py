@@ -81,7 +81,10 @@ Valve and hydraulics, calibrated together against the study's figures (see
 
 from __future__ import annotations
 
+import os
 import tomllib
+import weakref
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -90,7 +93,7 @@ import tomli_w
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
-from .errors import ParameterError, read_text
+from .errors import ParameterError, WetclutchError, check_number, read_text
 
 #: oil temperatures (C) at which the rig runs and the oil model holds; every oil temperature is checked against it
 OIL_TEMP_RANGE_C = (-30.0, 150.0)
@@ -99,6 +102,10 @@ OIL_TEMP_RANGE_C = (-30.0, 150.0)
 def check_oil_temp(temp_C: float, name: str) -> float:
     """``temp_C`` if it lies within :data:`OIL_TEMP_RANGE_C`, else a one-line error naming ``name``."""
     lo, hi = OIL_TEMP_RANGE_C
+    try:
+        temp_C = check_number(temp_C, name, "C")
+    except WetclutchError as e:
+        raise ParameterError(str(e)) from None
     if not lo <= temp_C <= hi:
         raise ParameterError(f"{name} {temp_C:g} C is outside {lo:g}..{hi:g} C")
     return float(temp_C)
@@ -122,22 +129,51 @@ class _Section(BaseModel):
     # strict: a boolean or a string given for a number is a mistake in the file or on the command line, not a
     # number (pydantic's lax mode reads ``true`` as 1.0 and ``"0.5"`` as 0.5); integers still pass as floats.
     # allow_inf_nan off: every parameter is a finite number, and NaN is refused as such, not by a failed bound.
+    # revalidate_instances: a section given as an instance (``Params(driveline=d)``, ``p.driveline = d``) is
+    # validated into a copy, so that two records never share a section
     model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False, strict=True,
-                              allow_inf_nan=False)
+                              allow_inf_nan=False, revalidate_instances="always")
 
     def __setattr__(self, name: str, value: Any) -> None:
-        """Assign and validate ``name``; a value refused by a check across fields leaves the old one in place.
+        """Assign and validate ``name``; a refused value is a one-line :class:`ParameterError` naming the parameter
+        and leaves the old one in place.
 
         pydantic runs a section's model validators after it has stored the new value, so without
-        this a refused assignment would leave the section holding the very value it refused.
+        this a refused assignment would leave the section holding the very value it refused. A section of a
+        :class:`Params` is then checked with the rest of that record (the checks across sections: ``mu(slip)``
+        positive up to ``driveline.omega_p0``).
         """
+        fields = type(self).model_fields
         old = self.__dict__.get(name)
         try:
-            super().__setattr__(name, value)
-        except ValidationError:
-            if name in type(self).model_fields:
+            super().__setattr__(name, _plain(value))
+        except ValidationError as err:
+            if name in fields:
                 self.__dict__[name] = old
-            raise
+            raise ParameterError(_one_line(err, _section_name(type(self)))) from None
+        holder = _holder(self)
+        if holder is not None and name in fields:
+            try:
+                holder._friction_positive_over_slip()
+            except PydanticCustomError as err:
+                self.__dict__[name] = old
+                raise ParameterError(err.message()) from None
+
+    def model_copy(self, *, update: Mapping[str, Any] | None = None, deep: bool = True) -> Any:
+        """A copy that shares nothing with this one (changing one never changes the other, whatever ``deep``), with
+        the values of ``update`` (field name -> value) put in and checked like any other.
+
+        Raises
+        ------
+        ParameterError
+            One line naming an unknown field or a refused value.
+        """
+        data = self.model_dump()
+        if update is not None:
+            if not isinstance(update, Mapping):
+                raise ParameterError(f"update must be a mapping of field name -> value, not {type(update).__name__}")
+            data |= {k: v.model_dump() if isinstance(v, BaseModel) else _plain(v) for k, v in update.items()}
+        return _build(type(self), data)
 
 
 class Driveline(_Section):
@@ -371,8 +407,26 @@ class Rig(_Section):
                           le=OIL_TEMP_RANGE_C[1])
 
 
-class Params(_Section):
-    """All parameters of the rig and its scenarios, SI units."""
+class _RefusesInOneLine(type(BaseModel)):
+    """The metaclass of :class:`Params`: ``Params(...)`` refuses a value as a one-line :class:`ParameterError`.
+
+    (An ``__init__`` of its own would do the same, but pydantic's validation then runs each record's checks twice.)
+    """
+
+    def __call__(cls, *args: Any, **kwargs: Any) -> Any:
+        try:
+            return super().__call__(*args, **kwargs)
+        except ValidationError as err:
+            raise ParameterError(_one_line(err)) from None
+
+
+class Params(_Section, metaclass=_RefusesInOneLine):
+    """All parameters of the rig and its scenarios, SI units.
+
+    ``Params(driveline={"ratio": 0.6})``, ``Params.model_validate(...)``, ``model_copy(update=...)`` and assignments
+    (``p.driveline.ratio = 0.6``) are checked; a refused value is a one-line :class:`ParameterError` naming the
+    parameter. A section given as an instance is copied, not shared.
+    """
 
     driveline: Driveline = Field(default_factory=Driveline)
     clutch: Clutch = Field(default_factory=Clutch)
@@ -403,6 +457,7 @@ class Params(_Section):
         PydanticCustomError
             ``mu`` is zero or negative somewhere in ``0 .. omega_p0``.
         """
+        _hold(self)
         f, span = self.friction, self.driveline.omega_p0
         slip, mu = lowest_mu(f, span)
         if not mu > 0.0:
@@ -411,6 +466,71 @@ class Params(_Section):
             raise _inconsistent(f"friction.mu_slip_poly {_shown(f.mu_slip_poly)}: mu(slip){shaped} must be > 0 for "
                                 f"slip 0..{span:g} rad/s (0..driveline.omega_p0); it is {mu:.3g} at {slip:.4g} rad/s")
         return self
+
+    @classmethod
+    def model_validate(cls, obj: Any, *args: Any, **kwargs: Any) -> Params:
+        """pydantic's, with a refusal as a one-line :class:`ParameterError` naming the parameter."""
+        try:
+            return super().model_validate(obj, *args, **kwargs)
+        except ValidationError as err:
+            raise ParameterError(_one_line(err)) from None
+
+    @classmethod
+    def model_validate_json(cls, json_data: Any, *args: Any, **kwargs: Any) -> Params:
+        """pydantic's, with a refusal as a one-line :class:`ParameterError` naming the parameter."""
+        try:
+            return super().model_validate_json(json_data, *args, **kwargs)
+        except ValidationError as err:
+            raise ParameterError(_one_line(err)) from None
+
+    def __deepcopy__(self, memo: dict[int, Any] | None = None) -> Params:
+        new = super().__deepcopy__(memo)
+        _hold(new)
+        return new
+
+    def __setstate__(self, state: dict[Any, Any]) -> None:
+        super().__setstate__(state)
+        _hold(self)
+
+
+#: the record that holds each section, by the section's id (the entry goes with the section): a value assigned to a
+#: section is checked with the rest of its record
+_HOLDERS: dict[int, weakref.ref] = {}
+
+
+def _hold(params: Params) -> None:
+    """Tie each section of ``params`` to it."""
+    for name in Params.model_fields:
+        section = params.__dict__.get(name)
+        if section is None:
+            continue
+        key = id(section)
+        if key not in _HOLDERS:
+            weakref.finalize(section, _HOLDERS.pop, key, None)
+        _HOLDERS[key] = weakref.ref(params)
+
+
+def _holder(section: _Section) -> Params | None:
+    """The record that holds ``section`` (None: a section on its own, or one since replaced in its record)."""
+    ref = _HOLDERS.get(id(section))
+    params = ref() if ref is not None else None
+    name = _section_name(type(section))
+    if params is None or params.__dict__.get(name) is not section:
+        return None
+    return params
+
+
+def _section_name(kind: type[_Section]) -> str:
+    """The name of a section of kind ``kind`` in a :class:`Params` (``driveline``), or "" for a whole record."""
+    return next((name for name, info in Params.model_fields.items() if info.annotation is kind), "")
+
+
+def _build(cls: type[_Section], data: dict[str, Any]) -> Any:
+    """``cls`` validated from ``data``; a refusal is a one-line :class:`ParameterError` naming the parameter."""
+    try:
+        return cls.model_validate(data)
+    except ValidationError as err:
+        raise ParameterError(_one_line(err, _section_name(cls))) from None
 
 
 def lowest_mu(f: Friction, slip_max: float) -> tuple[float, float]:
@@ -466,10 +586,15 @@ def _shown(value: Any) -> str:
     return text if len(text) <= 80 else text[:77] + "..."
 
 
-def _one_line(err: ValidationError) -> str:
+def _one_line(err: ValidationError, section: str = "") -> str:
+    """The first error of ``err`` on one line, naming the parameter (its path below ``section``, if given)."""
     e = err.errors()[0]
-    path = ".".join(str(p) for p in e["loc"]).encode("unicode_escape").decode()
-    if e["type"] == "extra_forbidden":
+    path = ".".join(str(p) for p in ((section,) if section else ()) + tuple(e["loc"])).encode("unicode_escape").decode()
+    if e["type"] == "model_type":
+        what = f"'{path}' must be a table of parameters" if path else \
+            f"a parameter set must be a table of sections ({', '.join(Params.model_fields)})"
+        return f"{what}, not {type(e.get('input')).__name__} (got {_shown(e.get('input'))})"
+    if e["type"] in ("extra_forbidden", "no_such_attribute"):
         return f"unknown parameter '{path}'"
     if e["type"] == _INCONSISTENT:
         # a check across parameters: its message names each of them with its value
@@ -479,10 +604,7 @@ def _one_line(err: ValidationError) -> str:
 
 
 def _validate(data: dict[str, Any]) -> Params:
-    try:
-        return Params.model_validate(data)
-    except ValidationError as err:
-        raise ParameterError(_one_line(err)) from None
+    return Params.model_validate(data)
 
 
 def _merge(base: dict[str, Any], path: str, value: Any) -> None:
@@ -519,6 +641,15 @@ def load(
     ParameterError
         One line naming the offending file or parameter.
     """
+    if base is not None and not isinstance(base, Params):
+        raise ParameterError(f"base must be a parameter set (wetclutch.load_params(...)), not {type(base).__name__}")
+    if param_file is not None and not isinstance(param_file, (str, os.PathLike)):
+        raise ParameterError(f"param_file must be a path (str or pathlib.Path), not {type(param_file).__name__}")
+    if overrides is not None and not isinstance(overrides, Mapping):
+        raise ParameterError("overrides must be a mapping of dotted parameter path -> value, e.g. "
+                             f"{{'driveline.ratio': 0.6}}, not {type(overrides).__name__}")
+    if overrides is not None and (bad := next((k for k in overrides if not isinstance(k, str)), None)) is not None:
+        raise ParameterError(f"overrides: a parameter path must be a string such as 'driveline.ratio' (got {bad!r})")
     data = (base or Params()).model_dump()
     if param_file is not None:
         path = Path(param_file)

@@ -33,12 +33,13 @@ pressure with an old torque.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import os
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 import numpy as np
 
-from ..errors import WetclutchError
+from ..errors import WetclutchError, check_instance, check_integer, kind_of, named
 from ..params import Params
 from ..physics import actuator
 from .dynamics import frequency_response, step_models
@@ -76,12 +77,25 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
     WetclutchError
         No recordings, one file given twice or two files holding the same recording, or an order out of range.
     """
+    if isinstance(recordings, (str, bytes, os.PathLike)) or not isinstance(recordings, (Iterable, type(None))):
+        raise WetclutchError(f"recordings must be a list of recordings ([wetclutch.ident.load(f) for f in files]), "
+                             f"not {kind_of(recordings)}")
+    recordings = list(recordings or ())
+    for i, rec in enumerate(recordings):
+        if not isinstance(rec, Recording):
+            hint = " (read it first: wetclutch.ident.load(path))" if isinstance(rec, (str, os.PathLike)) else ""
+            raise WetclutchError(f"recordings[{i}] must be a recording, not {kind_of(rec)}{hint}")
+    if prior is not None:
+        check_instance(prior, Params, "prior", "a parameter set (wetclutch.load_params(...)) or None")
+    if progress is not None and not callable(progress):
+        raise WetclutchError(f"progress must be a function of a file's name, or None, not {kind_of(progress)}")
     prior = prior or Params()
     if not recordings:
         raise WetclutchError("no measurement files to identify")
     _check_distinct(recordings)
-    if not 0 <= mu_order <= 7:
-        raise WetclutchError(f"--mu-order must be 0..7 (got {mu_order})")
+    mu_name = named("mu_order", "--mu-order")
+    if not 0 <= check_integer(mu_order, mu_name) <= 7:
+        raise WetclutchError(f"{mu_name} must be 0..7 (got {mu_order})")
     est: dict[str, Estimate] = {}
     onsets, steps, responses, ringings, points = [], [], [], [], []
     for rec in recordings:

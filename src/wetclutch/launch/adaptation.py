@@ -23,15 +23,14 @@ apart by what the pressure wanders, at the price of a little more stroke at the 
 
 from __future__ import annotations
 
-import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import tomli_w
 
-from ..errors import WetclutchError, read_text
-from ..params import OIL_TEMP_RANGE_C
+from ..errors import WetclutchError, finite_number, read_text, shown
+from ..params import OIL_TEMP_RANGE_C, Params
 from .controller import FRICTION_SLOPE_MAX, J1_MAX, THETA_MAX, THETA_MIN
 
 BAND_C = 20.0
@@ -140,11 +139,11 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
     if unknown:
         raise WetclutchError(f"{source}: {unknown[0]}: unknown field")
     if data.get("band_C") != BAND_C:
-        raise WetclutchError(f"{source}: band_C must be {BAND_C:g} (got {data.get('band_C')!r})")
+        raise WetclutchError(f"{source}: band_C must be {BAND_C:g} (got {shown(data.get('band_C'))})")
     inertia = data.get("output_inertia_kg_m2")
-    if inertia is not None and (isinstance(inertia, bool) or not isinstance(inertia, (int, float))
-                                or not 0.0 <= inertia <= J1_MAX):
-        raise WetclutchError(f"{source}: output_inertia_kg_m2: must be a number in 0..{J1_MAX:g} (got {inertia!r})")
+    if inertia is not None and (not finite_number(inertia) or not 0.0 <= inertia <= J1_MAX):
+        raise WetclutchError(f"{source}: output_inertia_kg_m2: must be a number in 0..{J1_MAX:g} "
+                             f"(got {shown(inertia)})")
     kiss, count, fric, slopes, margins = {}, {}, {}, {}, {}
     rows = data.get("band", [])
     if not isinstance(rows, list):
@@ -162,8 +161,8 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
             raise WetclutchError(f"{where}.{missing}: missing (every band has {', '.join(BAND_REQUIRED)})")
         lo, hi, v, n = row["from_C"], row["to_C"], row["kiss_Pa"], row["launches"]
         for key, x in (("from_C", lo), ("to_C", hi), ("kiss_Pa", v)):
-            if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
-                raise WetclutchError(f"{where}.{key}: must be a finite number (got {x!r})")
+            if not finite_number(x):
+                raise WetclutchError(f"{where}.{key}: must be a finite number (got {shown(x)})")
         b = band(lo)
         # the state is kept by band: a temperature inside a band would be taken for the whole band
         if b not in BANDS or lo != band_from(b):
@@ -176,7 +175,7 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
         if not 0.0 <= v <= 5e6:
             raise WetclutchError(f"{where}.kiss_Pa: {v:g} Pa is outside 0..5e6")
         if isinstance(n, bool) or not isinstance(n, int) or n < 0:
-            raise WetclutchError(f"{where}.launches: must be a whole number >= 0 (got {n!r})")
+            raise WetclutchError(f"{where}.launches: must be a whole number >= 0 (got {shown(n)})")
         kiss[b], count[b] = float(v), n
         learnable = (("friction_factor", fric, FRICTION_RANGE),
                      ("friction_slope_per_rad_s", slopes, (-FRICTION_SLOPE_MAX, FRICTION_SLOPE_MAX)),
@@ -184,10 +183,25 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
         for key, learnt, (low, high) in learnable:
             if key in row:
                 x = row[key]
-                if isinstance(x, bool) or not isinstance(x, (int, float)) or not low <= x <= high:
-                    raise WetclutchError(f"{where}.{key}: must be a number in {low:g}..{high:g} (got {x!r})")
+                if not finite_number(x) or not low <= x <= high:
+                    raise WetclutchError(f"{where}.{key}: must be a number in {low:g}..{high:g} (got {shown(x)})")
                 learnt[b] = float(x)
     return Adaptation(kiss, count, fric, slopes, None if inertia is None else float(inertia), margins)
+
+
+def check_plant(state: Adaptation, plant: Params, source: str = "adaptation file") -> Adaptation:
+    """``state`` if the plant it is launched on can reach its kiss points, else a one-line error naming the band: a
+    kiss point above the highest pressure the plant's supply gives (``min(p_supply, p_relief)``) is none (a state
+    from another clutch, or a hand-edited one): the controller would wait for a contact that never comes and hold the
+    valve open, slamming the plates before the request."""
+    h = plant.hydraulics
+    top = min(h.p_supply, h.p_relief)
+    for b, kiss in sorted(state.kiss_Pa.items()):
+        if kiss >= top:
+            raise WetclutchError(f"{source}: band {band_from(b):g}..{band_from(b + 1):g} C: kiss_Pa {kiss:g} Pa is not "
+                                 f"below the highest pressure the plant's supply gives, {top:g} Pa "
+                                 "(min(hydraulics.p_supply, hydraulics.p_relief))")
+    return state
 
 
 def load(path: str | Path) -> Adaptation:

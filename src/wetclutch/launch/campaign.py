@@ -7,9 +7,9 @@ from typing import Any
 
 from ..params import Params
 from . import loop, margins, verify
-from .ranges import load as load_ranges
 from .design import Design
-from .ranges import Range
+from .ranges import Range, fit
+from .ranges import load as load_ranges
 
 #: the nominal launches: oil temperatures (C) and requests (N m)
 NOMINAL_TEMPS = (41.0, 85.0)
@@ -45,6 +45,8 @@ def main_job(plant: Params, design: Design, baseline: Design, ranges: list[Range
     # refuse bad options before minutes of launches, not after
     verify.check_options(samples, seed, workers)
     verify.check_options(baseline_samples, seed, workers, "--baseline-samples")
+    rs = ranges if ranges is not None else load_ranges()
+    fit(rs, plant)  # and ranges that leave the plant's physical range
     launches = []
     for temp in NOMINAL_TEMPS:
         for t_ref in NOMINAL_REQUESTS:
@@ -55,6 +57,5 @@ def main_job(plant: Params, design: Design, baseline: Design, ranges: list[Range
     base = verify.run(baseline, plant, baseline_samples, seed, workers, ranges, progress=progress,
                       replay_args=baseline_replay_args, scheduler=scheduler, sequence=sequence,
                       through_lockup=through_lockup)
-    rs = ranges if ranges is not None else load_ranges()
     return MainJob(plant, design, baseline, launches, ver, base, margins.over_corners(baseline, plant, rs),
                    margins.launch_over_corners(design, plant, rs))

@@ -28,12 +28,13 @@ import functools
 import json
 import tomllib
 from dataclasses import dataclass, field, replace
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import WetclutchError
+from ..errors import WetclutchError, check_instance, check_number, kind_of
 from ..params import Params, flatten
 from ..physics import actuator, friction, oil
 from ..plant import clutch
@@ -447,8 +448,9 @@ def design(plant: Params, kind: str = "launch", origin: dict[str, str] | None = 
         Dotted parameter path -> how its value was obtained (``identified``,
         ``parameter file``, ``--set``; missing: ``default``), for the settings' sources.
     """
-    if kind not in KINDS:
-        raise WetclutchError(f"unknown controller '{kind}' (choose from {', '.join(KINDS)})")
+    _check_plant(plant, kind)
+    if origin is not None:
+        check_instance(origin, Mapping, "origin", "a mapping of dotted parameter path -> how it was obtained, or None")
     origin = origin or {}
     plant_values = plant_settings(plant, origin)
     table = feedforward(plant)
@@ -502,11 +504,28 @@ def _cached(plant_json: str, kind: str) -> Design:
 
 def cached(plant: Params, kind: str = "launch") -> Design:
     """:func:`design` of ``plant``, remembered (designs are pure functions of the plant)."""
+    _check_plant(plant, kind)
     return _cached(plant.model_dump_json(), kind)
+
+
+def _check_plant(plant: Params, kind: str) -> None:
+    """Refuse a plant that is no parameter set or an unknown kind of controller (one line naming the argument)."""
+    if isinstance(plant, Design):
+        raise WetclutchError("plant must be a parameter set (wetclutch.load_params(...)), not a Design (its plant is "
+                             "design.plant)")
+    check_instance(plant, Params, "plant", "a parameter set (wetclutch.load_params(...))")
+    if not isinstance(kind, str):
+        raise WetclutchError(f"kind must be one of {', '.join(KINDS)}, not {kind_of(kind)}")
+    if kind not in KINDS:
+        raise WetclutchError(f"unknown controller '{kind}' (choose from {', '.join(KINDS)})")
 
 
 def record(d: Design, dt: float = 1e-3) -> np.ndarray:
     """The flat record the compiled controller runs on (:func:`wetclutch.launch.controller.pack`)."""
+    check_instance(d, Design, "d", "a controller design (wetclutch.launch.design.design(...))")
+    dt = check_number(dt, "dt", "s")
+    if not 0.0 < dt < np.inf:
+        raise WetclutchError(f"controller sample time dt must be > 0 s (got {dt:g})")
     s = dict(d.settings)
     s["dip_n"] = round(s["dip_time"] / dt)
     s["dither_half_torque"] = round(0.5 / (s["dither_hz_torque"] * dt))
@@ -520,10 +539,14 @@ def record(d: Design, dt: float = 1e-3) -> np.ndarray:
 
 
 def with_settings(d: Design, **changes: float) -> Design:
-    """The design with some settings changed (names checked)."""
+    """The design with some settings changed (names checked, values finite numbers)."""
+    check_instance(d, Design, "d", "a controller design (wetclutch.launch.design.design(...))")
     unknown = sorted(set(changes) - set(SETTINGS[d.kind]))
     if unknown:
         raise WetclutchError(f"unknown setting '{unknown[0]}' of the {d.kind} controller")
+    for k, v in changes.items():
+        if not np.isfinite(check_number(v, f"setting '{k}'", SETTINGS[d.kind][k].unit)):
+            raise WetclutchError(f"setting '{k}' must be a finite number (got {v!r})")
     return replace(d, settings=d.settings | {k: float(v) for k, v in changes.items()},
                    sources=d.sources | {k: "changed" for k in changes})
 

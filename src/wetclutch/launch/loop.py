@@ -19,6 +19,7 @@ The clutch is in standby from t = 0; the torque request comes at
 from __future__ import annotations
 
 import functools
+import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -28,7 +29,8 @@ import pandas as pd
 from numba import njit
 from scipy.optimize import brentq
 
-from ..errors import SimulationError, WetclutchError
+from ..errors import (SimulationError, WetclutchError, check_flag, check_instance, check_integer, check_number,
+                      kind_of, named)
 from ..params import Params, check_oil_temp
 from ..physics import actuator
 from ..physics.friction import knee, normal_force
@@ -250,25 +252,57 @@ class Conditions:
         return HOLD_T_MAX if self.post_sync_hold else T_MAX
 
     def checked(self) -> Conditions:
-        if (why := condition_error("t_ref", self.t_ref, "--t-ref")) is not None:
+        """These conditions with their numbers as Python numbers, or one line naming the first field a launch cannot
+        take (its command-line option where the command line gave it: ``--t-ref``, else the field: ``t_ref``)."""
+        def name(field_: str) -> str:
+            return named(field_, _OPTIONS[field_]) if field_ in _OPTIONS else field_
+
+        numbers = {f: check_number(getattr(self, f), name(f), _UNITS[f])
+                   for f in ("t_ref", "t_request", "t_after", "dt", "noise_scale", "hold_time", "rtol")}
+        for f in ("oil_temp_C", "t_max"):
+            if getattr(self, f) is not None:
+                numbers[f] = check_number(getattr(self, f), name(f), _UNITS[f])
+        seed = check_integer(self.seed, name("seed"))
+        flags = {f: check_flag(getattr(self, f), f) for f in ("noise", "post_sync_hold")}
+        if not isinstance(self.profile, (str, os.PathLike)):
+            raise WetclutchError(f"{name('profile')} must be step, ramp or a CSV file's path, not "
+                                 f"{kind_of(self.profile)}")
+        c = replace(self, **numbers, **flags, seed=seed)
+        if (why := condition_error("t_ref", c.t_ref, name("t_ref"))) is not None:
             raise WetclutchError(why)
-        if self.oil_temp_C is not None:
-            check_oil_temp(self.oil_temp_C, "--oil-temp")
-        if self.profile not in PROFILES and not Path(self.profile).is_file():
-            raise WetclutchError(f"--profile must be step, ramp or an existing CSV file (got '{self.profile}')")
-        if self.seed < 0:
-            raise WetclutchError(f"--seed must be >= 0 (got {self.seed})")
-        if (why := condition_error("noise_scale", self.noise_scale, "--noise-scale")) is not None:
+        if c.oil_temp_C is not None:
+            check_oil_temp(c.oil_temp_C, name("oil_temp_C"))
+        if c.profile not in PROFILES and not Path(c.profile).is_file():
+            raise WetclutchError(f"{name('profile')} must be step, ramp or an existing CSV file (got '{c.profile}')")
+        if c.seed < 0:
+            raise WetclutchError(f"{name('seed')} must be >= 0 (got {c.seed})")
+        if (why := condition_error("noise_scale", c.noise_scale, name("noise_scale"))) is not None:
             raise WetclutchError(why)
-        if not 1e-4 <= self.dt <= 1e-2:
-            raise WetclutchError(f"controller sample time must be in 0.1..10 ms (got {self.dt * 1e3:g} ms)")
-        if not self.t_request + 0.5 < self.horizon <= 120.0:
-            raise WetclutchError(f"t_max must be in (t_request + 0.5, 120] s (got {self.horizon:g})")
-        if not 0.0 < self.hold_time <= 60.0:
-            raise WetclutchError(f"--hold-time must be in (0, 60] s (got {self.hold_time:g})")
-        if not 1e-10 <= self.rtol <= 1e-3:
-            raise WetclutchError(f"rtol must be in 1e-10..1e-3 (got {self.rtol:g})")
-        return self
+        if not 1e-4 <= c.dt <= 1e-2:
+            raise WetclutchError(f"controller sample time dt must be in 0.1..10 ms "
+                                 f"(got {c.dt * 1e3:g} ms)")
+        if not 0.0 <= c.t_request <= 100.0:
+            raise WetclutchError(f"t_request must be in 0..100 s (got {c.t_request:g})")
+        if not 0.0 <= c.t_after <= 120.0:
+            raise WetclutchError(f"t_after must be in 0..120 s (got {c.t_after:g})")
+        if not c.t_request + 0.5 < c.horizon <= 120.0:
+            raise WetclutchError(f"t_max must be in (t_request + 0.5, 120] s (got {c.horizon:g})")
+        if not 0.0 < c.hold_time <= 60.0:
+            raise WetclutchError(f"{name('hold_time')} must be in (0, 60] s (got {c.hold_time:g})")
+        if not c.post_sync_hold and c.hold_time != ratio_hold.HOLD_TIME:
+            raise WetclutchError(f"hold_time needs post_sync_hold=True (it limits that hold; got hold_time "
+                                 f"{c.hold_time:g} without it)")
+        if not 1e-10 <= c.rtol <= 1e-3:
+            raise WetclutchError(f"rtol must be in 1e-10..1e-3 (got {c.rtol:g})")
+        return c
+
+
+#: the command-line options of the conditions that ``wetclutch launch`` sets, for its error messages
+_OPTIONS = {"t_ref": "--t-ref", "oil_temp_C": "--oil-temp", "profile": "--profile", "seed": "--seed",
+            "noise_scale": "--noise-scale", "hold_time": "--hold-time"}
+#: the units of the conditions' numbers, for the error messages
+_UNITS = {"t_ref": "N m", "oil_temp_C": "C", "t_request": "s", "t_after": "s", "t_max": "s", "dt": "s",
+          "noise_scale": "", "hold_time": "s", "rtol": ""}
 
 
 def reference(cond: Conditions, t: np.ndarray) -> np.ndarray:
@@ -336,9 +370,26 @@ class LaunchResult:
 def _design(plant: Params, controller: design_.Design | str) -> design_.Design:
     if isinstance(controller, design_.Design):
         return controller
+    if not isinstance(controller, str):
+        raise WetclutchError(f"controller must be a design (wetclutch.launch.design.design(...)) or a kind "
+                             f"({', '.join(design_.KINDS)}), not {kind_of(controller)}")
     if controller not in design_.KINDS:
         raise WetclutchError(f"unknown controller '{controller}' (choose from {', '.join(design_.KINDS)})")
     return design_.cached(plant, controller)
+
+
+def _check_run(params: Params | None, conditions: Conditions | None, nominal: metrics.Response | None,
+               adaptation: Adaptation | None) -> None:
+    """Refuse arguments of a launch of the wrong kind (one line naming the argument)."""
+    if params is not None:
+        check_instance(params, Params, "params", "a parameter set (wetclutch.load_params(...)) or None")
+    if conditions is not None:
+        check_instance(conditions, Conditions, "conditions", "wetclutch.launch.Conditions(...) or None")
+    if nominal is not None:
+        check_instance(nominal, metrics.Response, "nominal", "a wetclutch.launch.metrics.Response or None")
+    if adaptation is not None:
+        check_instance(adaptation, Adaptation, "adaptation",
+                       "a wetclutch.launch.adaptation.Adaptation (a launch result's .adaptation) or None")
 
 
 def simulate(params: Params | None = None, controller: design_.Design | str = "launch",
@@ -363,8 +414,11 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
         What the launch controller learnt on earlier launches (default: nothing); the
         result carries the state after this launch.
     """
+    _check_run(params, conditions, nominal, adaptation)
     p = params if params is not None else Params()
     d = _design(p, controller)
+    if d.kind == "baseline" and adaptation is not None and adaptation != Adaptation():
+        raise WetclutchError("adaptation: the baseline controller has no adaptation (pass none)")
     cond = (conditions or Conditions()).checked()
     temp = p.rig.oil_temp_C if cond.oil_temp_C is None else float(cond.oil_temp_C)
     ctrl = design_.record(d, cond.dt)
@@ -564,7 +618,9 @@ def sequence(params: Params, controller: design_.Design | str, conditions: Condi
     Launch ``i`` runs with noise seed ``conditions.seed + i``; the last result's
     ``adaptation`` is the state after the sequence.
     """
-    check_sequence(n)
+    n = check_sequence(n, named("n", "--sequence"))
+    _check_run(params, conditions, nominal, adaptation)
+    conditions = (conditions if conditions is not None else Conditions()).checked()
     out: list[LaunchResult] = []
     learnt = adaptation
     for i in range(n):
@@ -574,7 +630,10 @@ def sequence(params: Params, controller: design_.Design | str, conditions: Condi
     return out
 
 
-def check_sequence(n: int) -> None:
-    """Refuse a sequence length outside 1..100 (one line naming the option)."""
+def check_sequence(n: int, name: str = "--sequence") -> int:
+    """``n`` if it is a sequence length (an integer in 1..100), else one line naming it ``name`` (the option, or
+    the argument of a Python call)."""
+    n = check_integer(n, name)
     if not 1 <= n <= 100:
-        raise WetclutchError(f"--sequence must be in 1..100 (got {n})")
+        raise WetclutchError(f"{name} must be in 1..100 (got {n})")
+    return n

@@ -8,7 +8,10 @@ path of :class:`~wetclutch.params.Params`) or one launch condition (:data:`CONDI
   ``"offset"``: added to the plant's value;
 * ``dist = "uniform"`` over ``[low, high]``, or ``"normal"`` with ``low`` and ``high`` at
   minus and plus two standard deviations (truncated there);
-* ``corner = true``: the corner cases take this range's extremes.
+* ``corner = true``: the corner cases take this range's extremes;
+* ``unit``, if given, labels the values in reports: the target's SI unit (``C``, ``N m``, ``-`` for the conditions),
+  or ``-`` for the factors of ``rel``; another (a range labelled in bar) is refused, since the values are read in
+  the SI unit whatever the label. A ``rel`` factor is never negative (offsets written under ``rel`` are refused).
 
 A condition's range must lie within what a launch takes (:func:`wetclutch.launch.loop.condition_error`): every value drawn lies
 between ``low`` and ``high``, so a file whose ends lie within can draw nothing else.
@@ -21,7 +24,6 @@ turn ranges into values; :func:`apply` puts values into a plant.
 from __future__ import annotations
 
 import itertools
-import math
 import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -29,8 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import WetclutchError, read_text
-from ..params import Params, load as load_params
+from ..errors import WetclutchError, finite_number, read_text, shown
+from ..params import Params, describe, load as load_params
 from .loop import condition_error
 
 DEFAULT_FILE = Path(__file__).resolve().parent / "data" / "ranges.toml"
@@ -86,9 +88,33 @@ def _number(where: str, raw: dict[str, Any], key: str) -> float:
     if key not in raw:
         raise _err(where, f"missing key '{key}'")
     v = raw[key]
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-        raise _err(f"{where}.{key}", f"must be a finite number (got {v!r})")
+    if not finite_number(v):
+        raise _err(f"{where}.{key}", f"must be a finite number (got {shown(v)})")
     return float(v)
+
+
+#: the unit of each launch condition's values
+CONDITION_UNITS = {"oil_temp_C": "C", "t_ref": "N m", "noise_scale": "-"}
+
+
+def _target_unit(target: str) -> str:
+    """The SI unit of ``target``'s values (a parameter's from :func:`wetclutch.params.describe`)."""
+    if target in CONDITION_UNITS:
+        return CONDITION_UNITS[target]
+    return next(u for path, _, u, _ in describe(Params()) if path == target)
+
+
+def _check_unit(where: str, target: str, how: str, unit: str) -> None:
+    """Refuse a ``unit`` that is not the one the range's values are in: a range's values are in the target's SI unit
+    (``abs``, ``offset``) or factors (``rel``), and the unit is only how reports label them, so a range written in
+    bar, or a factor labelled in Pa, would be read as something other than it says."""
+    if not unit:
+        return
+    expected = "-" if how == "rel" else _target_unit(target)
+    if unit != expected and not (expected in ("", "-") and unit in ("", "-")):
+        what = "a factor on the plant's value" if how == "rel" else f"{target}'s SI unit"
+        raise _err(f"{where}.unit", f"must be '{expected}' ({what}; got {shown(unit)}): the values are read in it whatever "
+                   "the label says")
 
 
 def parse(data: dict[str, Any], source: str = "ranges") -> list[Range]:
@@ -115,15 +141,19 @@ def parse(data: dict[str, Any], source: str = "ranges") -> list[Range]:
                            + ", ".join(CONDITIONS))
         how = raw.get("how", "abs")
         if how not in HOWS:
-            raise _err(f"{where}.how", f"must be one of {', '.join(HOWS)} (got {how!r})")
+            raise _err(f"{where}.how", f"must be one of {', '.join(HOWS)} (got {shown(how)})")
         if target in CONDITIONS and how != "abs":
             raise _err(f"{where}.how", f"a condition ('{target}') takes absolute values only")
         dist = raw.get("dist", "uniform")
         if dist not in DISTS:
-            raise _err(f"{where}.dist", f"must be one of {', '.join(DISTS)} (got {dist!r})")
+            raise _err(f"{where}.dist", f"must be one of {', '.join(DISTS)} (got {shown(dist)})")
         low, high = _number(where, raw, "low"), _number(where, raw, "high")
         if not low <= high:
             raise _err(f"{where}.low", f"must not exceed high ({low:g} > {high:g})")
+        if how == "rel" and low < 0.0:
+            # a factor below zero turns the parameter's sign: offsets written under "rel", most likely
+            raise _err(f"{where}.low", f"a factor on the plant's value must be >= 0 (got {low:g}); "
+                       "how = \"offset\" adds values in the parameter's unit")
         if target in CONDITIONS:
             # a condition is absolute and every draw (a normal one clipped) lies between the ends, and each
             # condition's allowed values form one interval: the ends decide
@@ -132,10 +162,11 @@ def parse(data: dict[str, Any], source: str = "ranges") -> list[Range]:
                     raise _err(f"{where}.{key}", why)
         corner = raw.get("corner", False)
         if not isinstance(corner, bool):
-            raise _err(f"{where}.corner", f"must be true or false (got {corner!r})")
+            raise _err(f"{where}.corner", f"must be true or false (got {shown(corner)})")
         unit = raw.get("unit", "")
         if not isinstance(unit, str):
-            raise _err(f"{where}.unit", f"must be a string (got {unit!r})")
+            raise _err(f"{where}.unit", f"must be a string (got {shown(unit)})")
+        _check_unit(where, target, how, unit)
         out.append(Range(name, target, how, low, high, dist, corner, unit))
     targets = [r.target for r in out]
     dup = next((t for t in targets if targets.count(t) > 1), None)
@@ -200,6 +231,11 @@ def apply(ranges: list[Range], values: dict[str, float], plant: Params) -> tuple
     return (load_params(None, sets, base=plant) if sets else plant), cond
 
 
+def _dotted(plant: Params, target: str) -> float:
+    section, key = target.split(".")
+    return float(getattr(getattr(plant, section), key))
+
+
 def _error(r: Range, x: float, plant: Params) -> WetclutchError | None:
     """Why ``r`` at ``x`` leaves ``plant``'s physical range, or a condition what a launch takes (None: it does not)."""
     if r.is_condition:
@@ -227,9 +263,15 @@ def fit(ranges: list[Range], plant: Params) -> tuple[list[Range], list[str]]:
     whose prestress is 0.2 bar stops at zero), found by bisection to a millionth of the range; returns the ranges
     and one sentence per limited range. Refuses (one line naming the range) an absolute range with an end out of
     the physical range (a condition's: out of what a launch takes, :func:`condition_error`), and a range with no
-    value within it."""
+    value within it. A ``rel`` range on a parameter that is 0 on ``plant`` is kept, with a sentence saying that it
+    varies nothing there."""
     out, notes = [], []
     for r in ranges:
+        if r.how == "rel" and not r.is_condition and _dotted(plant, r.target) == 0.0 and r.low != r.high:
+            # a factor on zero is zero: reported as varied, its bins and all, the range varies nothing on this plant
+            # (a plant may have none of it, a seal that does not leak: the shipped ranges must still run), so said
+            notes.append(f"{r.name} ({r.target}, rel) varies nothing on this plant: its value is 0, and so is every "
+                         "factor of it (how = \"abs\" or \"offset\" would vary it)")
         errors = [_error(r, end, plant) for end in (r.low, r.high)]
         if errors == [None, None]:
             out.append(r)

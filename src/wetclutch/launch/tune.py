@@ -137,6 +137,49 @@ def check_options(samples: int, generations: int, popsize: int) -> None:
         raise WetclutchError(f"--popsize must be >= 2 (got {popsize})")
 
 
+def check_state(path: str | Path) -> Path:
+    """``path`` as a state file a search can be saved to (one line naming ``--state`` if not): a file or nothing yet,
+    in a directory that exists. Checked before the search, not after its first generation."""
+    path = Path(path)
+    if not str(path).strip():
+        raise WetclutchError("--state must not be empty")
+    if path.exists() and not path.is_file():
+        raise WetclutchError(f"--state '{path}' is not a file")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise WetclutchError(f"--state '{path}': directory '{parent}' does not exist")
+    return path
+
+
+def _load_state(path: Path, cma: Any) -> tuple[Any, Tuning]:
+    """The search (CMA-ES state, :class:`Tuning`) saved in ``path``, or a one-line error: not a state this module
+    saved (any other file, pickled or not)."""
+    try:
+        state = pickle.loads(path.read_bytes())
+    except OSError as e:
+        raise WetclutchError(f"cannot resume from '{path}': {e.strerror or e}") from None
+    except Exception as e:  # noqa: BLE001 - unpickling a foreign file can raise anything
+        raise WetclutchError(f"cannot resume from '{path}': not a tuning state ({type(e).__name__})") from None
+    if (not isinstance(state, tuple) or len(state) != 2 or not isinstance(state[0], cma.CMAEvolutionStrategy)
+            or not isinstance(state[1], Tuning)):
+        raise WetclutchError(f"cannot resume from '{path}': not a tuning state (it holds a {type(state).__name__})")
+    return state
+
+
+def _save_state(path: Path, es: Any, tuning: Tuning) -> None:
+    """Save the search to ``path`` whole (a temporary file beside it, then a rename), or a one-line error."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        tmp.write_bytes(pickle.dumps((es, tuning)))
+        tmp.replace(path)
+    except OSError as e:
+        tmp.unlink(missing_ok=True)
+        raise WetclutchError(f"cannot save the search to --state '{path}': {e.strerror or e}") from None
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
 def scoring(samples: int, seed: int, popsize: int, sequence: int, plant: Params,
             ranges: list[Range]) -> dict[str, Any]:
     """What a search's scores depend on besides its start, each under the option that sets it.
@@ -208,11 +251,10 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
     def verified(design: Design, n: int, s: int) -> dict[str, Any]:
         return verify.run(design, plant, n, s, workers, ranges, corners=False, progress=False, sequence=sequence)
 
+    if path is not None:
+        check_state(path)
     if path is not None and path.is_file():
-        try:
-            es, tuning = pickle.loads(path.read_bytes())
-        except (pickle.UnpicklingError, EOFError, AttributeError, ValueError) as e:
-            raise WetclutchError(f"cannot resume from '{path}': {type(e).__name__}") from None
+        es, tuning = _load_state(path, cma)
         if tuning.start.key() != start.key():
             raise WetclutchError(f"'{path}' is the state of another tuning (other design); remove it to start anew")
         saved = getattr(tuning, "settings", None) or {}
@@ -250,9 +292,7 @@ def run(start: Design, plant: Params | None = None, ranges: list[Range] | None =
         tuning.history.append({"generation": len(tuning.history) + 1, "best_score": float(min(scores)),
                                "mean_score": float(np.mean(scores)), "best_pass_rate": float(rates[i])})
         if path is not None:
-            tmp = path.with_suffix(path.suffix + ".tmp")
-            tmp.write_bytes(pickle.dumps((es, tuning)))
-            tmp.replace(path)
+            _save_state(path, es, tuning)
         if on_generation is not None:
             on_generation(len(tuning.history), tuning.best_score, tuning.best_rate)
     with _quiet_cma():

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 from scipy.stats import binomtest
 
-from ..errors import WetclutchError
+from ..errors import WetclutchError, check_flag, check_instance, check_integer, kind_of, named
 from ..params import Params
 from . import distributed
 from . import loop as launch
@@ -199,14 +199,39 @@ def _warm(one: Any, sample: Sample) -> None:
     one(sample)
 
 
-def check_options(n: int, seed: int, workers: int | None, samples_option: str = "--samples") -> None:
-    """Refuse a bad sample count, seed or worker count (one-line errors naming the option)."""
-    if n < 0:
+def check_options(n: int, seed: int, workers: int | None, samples_option: str = "--samples",
+                  seed_option: str = "--seed", workers_option: str = "--workers") -> None:
+    """Refuse a bad sample count, seed or worker count (one-line errors naming the option, or the argument of a
+    Python call: ``samples_option``, ``seed_option``, ``workers_option``)."""
+    if check_integer(n, samples_option) < 0:
         raise WetclutchError(f"{samples_option} must be >= 0 (got {n})")
-    if seed < 0:
-        raise WetclutchError(f"--seed must be >= 0 (got {seed})")
-    if workers is not None and workers < 1:
-        raise WetclutchError(f"--workers must be >= 1 (got {workers})")
+    if check_integer(seed, seed_option) < 0:
+        raise WetclutchError(f"{seed_option} must be >= 0 (got {seed})")
+    if workers is not None and check_integer(workers, workers_option) < 1:
+        raise WetclutchError(f"{workers_option} must be >= 1 (got {workers})")
+
+
+def _check_run(design: Design, plant: Params | None, ranges: list[ranges_mod.Range] | None,
+               scheduler: str | None, replay_args: str) -> None:
+    """Refuse arguments of :func:`run` of the wrong kind (one line naming the argument)."""
+    if isinstance(design, Params):
+        raise WetclutchError("design must be a controller design (wetclutch.launch.design.design(params, kind)), "
+                             "not a parameter set (the plant goes second: run(design, plant, ...))")
+    check_instance(design, Design, "design", "a controller design (wetclutch.launch.design.design(params, kind))")
+    if isinstance(plant, Design):
+        raise WetclutchError("plant must be a parameter set (wetclutch.load_params(...)) or None, not a Design "
+                             "(the design goes first: run(design, plant, ...))")
+    if plant is not None:
+        check_instance(plant, Params, "plant", "a parameter set (wetclutch.load_params(...)) or None")
+    if ranges is not None:
+        if not isinstance(ranges, (list, tuple)):
+            raise WetclutchError(f"ranges must be a list of ranges (wetclutch.launch.ranges.load(path)) or None, not "
+                                 f"{kind_of(ranges)}")
+        for i, r in enumerate(ranges):
+            check_instance(r, ranges_mod.Range, f"ranges[{i}]", "a range (wetclutch.launch.ranges.load(path))")
+    if scheduler is not None:
+        check_instance(scheduler, str, "scheduler", "a dask scheduler's address (str) or None")
+    check_instance(replay_args, str, "replay_args", "a string of command-line options")
 
 
 def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 0, workers: int | None = None,
@@ -258,14 +283,25 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
         of the first launch and of the corners, percentiles, worst cases and every sample's row (``results``).
     """
     global _SHARED
-    check_options(n, seed, workers)
-    launch.check_sequence(sequence)
+    _check_run(design, plant, ranges, scheduler, replay_args)
+    # the command line checks its options before this; these are a Python caller's arguments
+    check_options(n, seed, workers, "n", "seed", "workers")
+    sequence = launch.check_sequence(sequence, "sequence")
+    corners, progress, through_lockup = (check_flag(corners, "corners"), check_flag(progress, "progress"),
+                                         check_flag(through_lockup, "through_lockup"))
+    # the profile as each launch checks it, before any is made
+    launch.Conditions(profile=profile).checked()
     plant = plant if plant is not None else design.plant
     rs, limited = ranges_mod.fit(ranges if ranges is not None else ranges_mod.load(), plant)
     ctx = Context(design, plant, rs, profile, replay_args + (f" --sequence {sequence}" if sequence > 1 else ""),
                   sequence, through_lockup, tuple(limited))
     workers = workers or os.cpu_count() or 1
     cases = samples(ctx, n, seed, corners)
+    if not cases:
+        # no pass rate to give: refused rather than a NaN
+        why = "corners=False" if not corners else "the ranges have no corner ranges"
+        raise WetclutchError(f"nothing to verify: {named('n', '--samples')} is 0 (no random samples) and there are "
+                             f"no corner cases ({why})")
     # the design's nominal responses, made once here and inherited by the forked workers
     _SHARED = (ctx, nominal_grid(design, profile))
     results: list[dict[str, Any]] = []

@@ -26,7 +26,7 @@ import pandas as pd
 
 from ..physics import thermal
 from ..plant import driveline
-from ..errors import WetclutchError
+from ..errors import WetclutchError, check_instance, check_integer, check_number, kind_of
 from ..sim.network import Network, Trajectory, integrate
 from ..params import Params
 from ..sim.signals import Ramp, Sine, Step
@@ -142,6 +142,8 @@ def simulate(scenario: str, params: Params | None = None, t_end: float | None = 
     >>> 2.0 < r.summary["t_sync"] < 5.0
     True
     """
+    if not isinstance(scenario, str):
+        raise WetclutchError(f"scenario must be a scenario's name ({', '.join(SCENARIOS)}), not {kind_of(scenario)}")
     if scenario not in SCENARIOS:
         raise WetclutchError(f"unknown scenario '{scenario}' (choose from {', '.join(SCENARIOS)})")
     unknown = set(options) - set(SOLVER_OPTIONS)
@@ -174,6 +176,12 @@ def launch_sequence(params: Params | None = None, n: int = 10, pause: float = 10
     slip power); each launch starts at the temperature the previous one left. One row per
     launch: plate temperature at its start, peak and end (C), and the clutch's slip energy (J).
     """
+    if params is not None:
+        check_instance(params, Params, "params", "a parameter set (wetclutch.load_params(...)) or None")
+    if check_integer(n, "n") < 1:
+        raise WetclutchError(f"n must be >= 1 launch (got {n})")
+    if not 0.0 <= check_number(pause, "pause", "s") < np.inf:
+        raise WetclutchError(f"pause must be a finite time >= 0 s (got {pause!r})")
     p = params if params is not None else Params()
     t_plate = p.rig.oil_temp_C
     rows = []

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..errors import WetclutchError
+from ..errors import WetclutchError, check_flag, check_instance, check_integer, check_number, kind_of, named
 from ..params import Params, check_oil_temp
 from ..physics import actuator as A
 from ..physics import friction
@@ -73,30 +73,42 @@ class Settings:
     t_end: float | None = None
 
     def checked(self, params: Params) -> Settings:
-        """Fill defaults and refuse settings outside the rig's range (one-line errors)."""
-        if self.experiment not in EXPERIMENTS:
+        """Fill defaults and refuse settings outside the rig's range (one-line errors naming the setting: its
+        command-line option where the command line gave it, ``--level``, else the field, ``level``)."""
+        def name(field: str) -> str:
+            return named(field, _OPTIONS[field])
+
+        if not isinstance(self.experiment, str) or self.experiment not in EXPERIMENTS:
             raise WetclutchError(f"unknown experiment '{self.experiment}' (choose from {', '.join(EXPERIMENTS)})")
-        if self.input_mode not in INPUT_RANGE:
-            raise WetclutchError(f"--input-mode must be dc or pwm (got '{self.input_mode}')")
-        if self.config not in clutch.CONFIGS:
-            raise WetclutchError(f"--config must be clutch or valve-only (got '{self.config}')")
+        if not isinstance(self.input_mode, str) or self.input_mode not in INPUT_RANGE:
+            raise WetclutchError(f"{name('input_mode')} must be dc or pwm (got '{self.input_mode}')")
+        if not isinstance(self.config, str) or self.config not in clutch.CONFIGS:
+            raise WetclutchError(f"{name('config')} must be clutch or valve-only (got '{self.config}')")
         lo, hi = INPUT_RANGE[self.input_mode]
         unit = "V" if self.input_mode == "dc" else "duty"
-        level = DEFAULT_LEVEL[self.input_mode] if self.level is None else float(self.level)
-        from_ = lo if self.from_ is None else float(self.from_)
-        for name, v in (("--level", level), ("--from", from_)):
+        level = DEFAULT_LEVEL[self.input_mode] if self.level is None else check_number(self.level, name("level"), unit)
+        from_ = lo if self.from_ is None else check_number(self.from_, name("from_"), unit)
+        for field, v in (("level", level), ("from_", from_)):
             if not lo <= v <= hi:
-                raise WetclutchError(f"{name} {v:g} is outside the rig's input range {lo:g}..{hi:g} {unit}")
-        temp = params.rig.oil_temp_C if self.oil_temp_C is None else float(self.oil_temp_C)
-        check_oil_temp(temp, "--oil-temp")
-        if not 10.0 <= self.rate_hz <= 1.0 / TRUTH_DT / 2:
-            raise WetclutchError(f"--rate must be in 10..{1.0 / TRUTH_DT / 2:g} Hz (got {self.rate_hz:g})")
-        if self.seed < 0:
-            raise WetclutchError(f"--seed must be >= 0 (got {self.seed})")
-        if self.t_end is not None and not T_STEP < self.t_end <= MAX_T_END_S:
-            raise WetclutchError(f"--t-end must be in ({T_STEP:g}, {MAX_T_END_S:g}] s (got {self.t_end:g})")
-        return Settings(self.experiment, self.input_mode, level, from_, temp, self.config, float(self.rate_hz),
-                        int(self.seed), bool(self.noise), self.t_end)
+                raise WetclutchError(f"{name(field)} {v:g} is outside the rig's input range {lo:g}..{hi:g} {unit}")
+        temp = params.rig.oil_temp_C if self.oil_temp_C is None else self.oil_temp_C
+        temp = check_oil_temp(temp, name("oil_temp_C"))
+        rate = check_number(self.rate_hz, name("rate_hz"), "Hz")
+        if not 10.0 <= rate <= 1.0 / TRUTH_DT / 2:
+            raise WetclutchError(f"{name('rate_hz')} must be in 10..{1.0 / TRUTH_DT / 2:g} Hz (got {rate:g})")
+        if check_integer(self.seed, name("seed")) < 0:
+            raise WetclutchError(f"{name('seed')} must be >= 0 (got {self.seed})")
+        noise = check_flag(self.noise, "noise")
+        t_end = None if self.t_end is None else check_number(self.t_end, name("t_end"), "s")
+        if t_end is not None and not T_STEP < t_end <= MAX_T_END_S:
+            raise WetclutchError(f"{name('t_end')} must be in ({T_STEP:g}, {MAX_T_END_S:g}] s (got {t_end:g})")
+        return Settings(self.experiment, self.input_mode, level, from_, temp, self.config, rate,
+                        int(self.seed), noise, t_end)
+
+
+#: the command-line options of the settings, for the errors of ``wetclutch rig``
+_OPTIONS = {"input_mode": "--input-mode", "config": "--config", "level": "--level", "from_": "--from",
+            "oil_temp_C": "--oil-temp", "rate_hz": "--rate", "seed": "--seed", "t_end": "--t-end"}
 
 
 @dataclass
@@ -219,6 +231,11 @@ def run(experiment: str = "step", params: Params | None = None, **settings: Any)
         ``measured`` (the rig's channels, SI; ``u`` in V or duty, ``oil_temp`` in C)
         and ``truth`` (noise-free internal states on a 0.1 ms grid).
     """
+    if not isinstance(experiment, str):
+        raise WetclutchError(f"experiment must be an experiment's name ({', '.join(EXPERIMENTS)}), not "
+                             f"{kind_of(experiment)}")
+    if params is not None:
+        check_instance(params, Params, "params", "a parameter set (wetclutch.load_params(...)) or None")
     p = params if params is not None else Params()
     unknown = set(settings) - set(Settings.__dataclass_fields__)
     if unknown:
