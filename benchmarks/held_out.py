@@ -15,7 +15,7 @@ requirement's count, those of them that no controller passes, and those whose fi
 adaptation lost them). These are the acceptance figures of the adapted launch controller (>= 97 % of first
 launches, >= 99.5 % after three launches).
 
-Not a timing. Usage: ``python benchmarks/held_out.py [--seeds 101,103,107,109] [--samples N]``
+Not a timing. Usage: ``python benchmarks/held_out.py [--seeds 101,103,107,109] [--samples N] [--sequence K]``
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", default=",".join(map(str, SEEDS)), help="comma-separated verification seeds")
     ap.add_argument("--samples", type=int, default=1000, help="random samples per seed")
+    ap.add_argument("--sequence", type=int, default=3, help="launches of each clutch (the last one is judged)")
     args = ap.parse_args()
     seeds = [int(s) for s in args.seeds.split(",")]
     d = design.cached(Params())
@@ -43,7 +44,7 @@ def main() -> None:
     third, first, reach = [], [], []
     failed = []
     for seed in seeds:
-        r = verify.run(d, n=args.samples, seed=seed, sequence=3, progress=False)
+        r = verify.run(d, n=args.samples, seed=seed, sequence=args.sequence, progress=False)
         lo, hi = r["pass_rate_interval"]
         third.append(r["pass_rate"])
         first.append(r["pass_rate_first_launch"])
