@@ -513,3 +513,17 @@ def test_a_launch_and_a_design_show_their_figures_not_their_arrays():
     shown = repr(d)
     assert shown.startswith("Design(launch, ") and f"p_kiss={d.settings['p_kiss']:.4g}" in shown
     assert "[[" not in shown and len(shown) < 2000
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ("time,t_ref\n", "needs at least two rows"),
+    ("time,t_ref\n0,50\n1,1e3000\n", "'t_ref' is not finite in data row 2"),
+    ("time,t_ref\n0,10\n0,20\n", "'time' must increase (data row 2)"),
+    ("time,t_ref\n0,0\n1,0\n", "'t_ref' is 0 throughout"),
+])
+def test_a_bad_profile_file_says_what_is_wrong_with_it(tmp_path, text, fragment):
+    f = tmp_path / "profile.csv"
+    f.write_text(text)
+    with pytest.raises(WetclutchError) as e:
+        launch.reference(launch.Conditions(profile=str(f)), np.zeros(3))
+    assert fragment in str(e.value) and str(e.value).startswith(f"profile {f}")

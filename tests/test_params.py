@@ -215,7 +215,8 @@ def test_integers_still_pass_as_numbers(tmp_path):
 def test_a_boolean_in_a_parameter_file_is_refused(tmp_path):
     f = tmp_path / "p.toml"
     f.write_text("[driveline]\nratio = true\n")
-    with pytest.raises(ParameterError, match=r"^parameter 'driveline.ratio': must be a number \(got true\)$"):
+    with pytest.raises(ParameterError, match=r"^parameter file '.*p.toml': parameter 'driveline.ratio': must be a number "
+                       r"\(got true\)$"):
         wc.load_params(f)
 
 
@@ -319,3 +320,15 @@ def test_a_parameter_file_with_a_byte_order_mark_loads(tmp_path):
     f = tmp_path / "bom.toml"
     f.write_bytes(b"\xef\xbb\xbf[driveline]\nratio = 0.6\n")
     assert pm.load(f).driveline.ratio == 0.6
+
+
+@pytest.mark.parametrize("text, fragment", [("kind = 'launch'\n", "unknown parameter 'kind'"),
+                                            ("[driveline]\nratio = -1\n", "driveline.ratio")])
+def test_an_error_in_a_parameter_file_names_the_file(tmp_path, text, fragment):
+    # a controller file given as a parameter file, or a value out of range: the file is named, with or without
+    # overrides on top
+    f = tmp_path / "plant.toml"
+    f.write_text(text)
+    for overrides in (None, {"driveline.J_1": 0.002}):
+        with pytest.raises(pm.ParameterError, match=f"^parameter file '{f}': .*{fragment}"):
+            pm.load(f, overrides)

@@ -202,3 +202,14 @@ def test_rig_settings_name_the_field(kwargs, fragment):
 def test_rig_refuses_arguments_of_the_wrong_kind():
     refused(lambda: rig.run(["step"]), "experiment")
     refused(lambda: rig.run("step", {}), "params")
+
+
+def test_a_trajectory_asked_for_an_element_it_has_not_names_the_ones_it_has():
+    tr = wc.simulate("coupled-clutches", t_end=0.2).trajectory
+    refused(lambda: tr.speed("J9"), "no body named 'J9'", "J1, J2, J3, J4")
+    refused(lambda: tr.clutch_torque("J1"), "no clutch named 'J1'")
+
+
+@pytest.mark.parametrize("args, fragment", [((5,), "path must be"), (("x.csv", "x"), "channel_map must be")])
+def test_a_recording_given_as_something_else_is_one_line(args, fragment):
+    refused(lambda: ident.load(*args), fragment)

@@ -187,6 +187,51 @@ def test_the_launch_plot_keeps_one_colour_per_launch_and_names_its_conditions(tm
     assert "41 C" in title and "100 N m" in title and "launch controller" in title
 
 
+def test_the_launch_plot_gives_the_compared_launchs_verdicts_too(tmp_path, monkeypatch):
+    t = np.linspace(0.0, 2.0, 201)
+    step = np.where(t > 1.0, 100.0, 0.0)
+    sig = pd.DataFrame({"time": t, "t_ref": step, "T_r": step, "p_clutch": 1e5 + 1e3 * step, "u": 1.0 + 0.01 * step,
+                        "omega_p": 150.0 - 10 * t, "omega_1": 10 * t, "omega_s": 5 * t})
+    truth = pd.DataFrame({"time": t, "T_r": step})
+    base = _summary(41.0, 100.0, "baseline")
+    base["requirements"] = {k: k != "response_time" for k in metrics.REQUIREMENTS}
+    figs = []
+    monkeypatch.setattr(plots.plt, "close", figs.append)
+    plots.plot_launch(sig, truth, _summary(41.0, 100.0, "launch"), tmp_path / "l.png", extra=sig,
+                      extra_label="baseline", extra_summary=base)
+    lines = figs[0]._suptitle.get_text().splitlines()
+    assert lines[1].startswith("launch: ") and "FAIL" not in lines[1]
+    assert lines[2].startswith("baseline: ") and "response_time FAIL" in lines[2]
+
+
+def test_the_rig_plot_gives_the_commands_unit(tmp_path, monkeypatch):
+    t = np.linspace(0.0, 1.0, 11)
+    df = pd.DataFrame({"time": t, "u": 0.2 + 0.0 * t, "p_clutch": 1e5 + 0.0 * t})
+    figs = []
+    monkeypatch.setattr(plots.plt, "close", figs.append)
+    plots.plot_rig(df, df, tmp_path / "r.png", "wetclutch rig step", u_unit="duty")
+    assert figs[0].axes[0].get_title(loc="left") == "Command u [duty]"
+
+
+# ---------------------------------------------------------------- the calibration report on a clutch of its own
+
+
+def test_the_calibration_report_neither_calls_another_clutch_the_default_nor_prints_nan(tmp_path):
+    from wetclutch.report import calibration as calibration_report
+    from wetclutch.rig.calibration import Figure
+
+    figs = [Figure("contact pressure (torque onset)", 0.7, 1.1, 0.4, 0.1, "absolute", "bar"),
+            Figure("dead time pdc 0.05 at 41 C", 0.5, float("nan"), float("nan"), 0.2, unit="s"),
+            Figure("valve hysteresis visible (up vs down staircase)", "visible", 0.153, 0.0, 0.0, "absolute", "bar")]
+    calibration_report.write(figs, tmp_path / "cal")
+    md = (tmp_path / "cal" / "report.md").read_text()
+    assert "default rig" not in md and "nan" not in md.lower()
+    rows = {ln.split("|")[1].strip(): [c.strip() for c in ln.strip("|").split("|")] for ln in md.splitlines()
+            if ln.startswith("| ") and not ln.startswith("| figure")}
+    assert rows["dead time pdc 0.05 at 41 C"][2:4] == ["no torque onset", "-"]
+    assert rows["valve hysteresis visible (up vs down staircase)"][3:5] == ["-", "> 0.02 bar up-down"]
+
+
 def test_verify_md_names_the_plant_and_whether_the_controller_was_designed_on_it(tmp_path):
     res = verification()
     own = designs.cached(Params())
@@ -198,3 +243,12 @@ def test_verify_md_names_the_plant_and_whether_the_controller_was_designed_on_it
     md = (tmp_path / "mismatch" / "verify.md").read_text()
     assert "vary around the parameter file `my.toml`, with `driveline.ratio=0.6`" in md
     assert "was designed on another plant (the `[plant]` section of `controller.toml`)" in md
+
+
+def test_html_tables_align_the_first_columns_header_with_its_cells():
+    from wetclutch.report import html
+
+    page = html.page("t", "| requirement | pass rate |\n|---|---|\n| creep | 100.0 % |\n", {})
+    css = re.search(r"<style>(.*?)</style>", page, re.S).group(1)
+    rule = next(r for r in css.split("}") if "td:first-child" in r)
+    assert "th:first-child" in rule and "text-align: left" in rule

@@ -131,8 +131,11 @@ def test_bad_options():
     # a Python caller's arguments are named as such (the command line names its options: test_cli)
     with pytest.raises(WetclutchError, match="^n must be >= 0"):
         verify.run(d, n=-1, progress=False)
-    with pytest.raises(WetclutchError, match="^workers must be >= 1"):
+    with pytest.raises(WetclutchError, match="^workers must be in 1..256"):
         verify.run(d, n=1, workers=0, progress=False)
+    # each local worker process starts at once: a thousand would fork a thousand
+    with pytest.raises(WetclutchError, match=r"^workers must be in 1..256 \(got 1000\)"):
+        verify.run(d, n=1, workers=1000, progress=False)
 
 
 def test_the_pass_rate_is_the_random_samples_and_the_corners_stand_beside_it():

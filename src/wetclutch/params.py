@@ -659,8 +659,16 @@ def load(
         except tomllib.TOMLDecodeError as err:
             reason = str(err).replace("\n", " ")
             raise ParameterError(f"parameter file '{path}' is not valid TOML: {reason}") from None
-        for dotted, value in flatten(given).items():
-            _merge(data, dotted, value)
+        try:
+            for dotted, value in flatten(given).items():
+                _merge(data, dotted, value)
+            # the file on its own: an error in it names the file (a controller file given as a parameter file would
+            # say only "unknown parameter 'kind'")
+            from_file = _validate(data)
+        except ParameterError as err:
+            raise ParameterError(f"parameter file '{path}': {err}") from None
+        if not overrides:
+            return from_file
     for dotted, value in (overrides or {}).items():
         _merge(data, dotted, _plain(value))
     return _validate(data)

@@ -26,6 +26,7 @@ a row) and a jittery clock are interpolated onto a uniform grid; missing values 
 from __future__ import annotations
 
 import json
+import os
 import math
 import tomllib
 from collections.abc import Mapping
@@ -35,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import WetclutchError, read_text
+from ..errors import WetclutchError, kind_of, read_text
 from ..physics.actuator import CONFIGS
 from ..rig.experiments import EXPERIMENTS, MEASURED_UNITS
 from ..rig.files import read_columns
@@ -237,6 +238,11 @@ def load(path: str | Path, channel_map: Mapping[str, Mapping[str, str]] | None =
         samples, a sample rate outside :data:`RATE_MIN_HZ` .. :data:`RATE_MAX_HZ` or a record shorter than
         :data:`DURATION_MIN_S` (both a time column in the wrong unit).
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise WetclutchError(f"path must be a measurement file's path (str or pathlib.Path), not {kind_of(path)}")
+    if channel_map is not None and not isinstance(channel_map, Mapping):
+        raise WetclutchError(f"channel_map must be a mapping of channel -> {{name, unit}} (read_channel_map(path)), "
+                             f"not {kind_of(channel_map)}")
     path = Path(path)
     cmap = dict(channel_map or {})
     # the columns the map names: another column the reader cannot read (text, another raster) is no reason to refuse

@@ -313,16 +313,24 @@ def reference(cond: Conditions, t: np.ndarray) -> np.ndarray:
     elif cond.profile == "ramp":
         r = cond.t_ref * np.clip(tau / RAMP_TIME, 0.0, 1.0)
     else:
+        where = f"{named('profile', '--profile')} {cond.profile}"
         try:
             f = pd.read_csv(cond.profile)
             tt = np.asarray(f["time"], dtype=float)
             rr = np.asarray(f["t_ref"], dtype=float)
         except (OSError, KeyError, ValueError, pd.errors.ParserError) as e:
-            raise WetclutchError(f"--profile {cond.profile}: needs numeric columns 'time' and 't_ref' ({type(e).__name__})") from None
-        if tt.size < 2 or not np.all(np.isfinite(tt)) or not np.all(np.isfinite(rr)) or np.any(np.diff(tt) <= 0):
-            raise WetclutchError(f"--profile {cond.profile}: 'time' must increase and all values be finite")
+            raise WetclutchError(f"{where}: needs numeric columns 'time' and 't_ref' ({type(e).__name__})") from None
+        if tt.size < 2:
+            raise WetclutchError(f"{where}: needs at least two rows (time, t_ref), has {tt.size}")
+        for name, v in (("time", tt), ("t_ref", rr)):
+            if not np.all(np.isfinite(v)):
+                raise WetclutchError(f"{where}: '{name}' is not finite in data row {int(np.argmin(np.isfinite(v))) + 1}")
+        if np.any(np.diff(tt) <= 0):
+            raise WetclutchError(f"{where}: 'time' must increase (data row {int(np.argmax(np.diff(tt) <= 0)) + 2})")
         if np.any(rr < 0) or np.any(rr > 1000):
-            raise WetclutchError(f"--profile {cond.profile}: 't_ref' must be in 0..1000 N m")
+            raise WetclutchError(f"{where}: 't_ref' must be in 0..1000 N m")
+        if not np.any(rr > 0):
+            raise WetclutchError(f"{where}: 't_ref' is 0 throughout: no torque is requested")
         r = np.interp(tau, tt, rr)
     return np.where(tau >= 0.0, r, 0.0)
 

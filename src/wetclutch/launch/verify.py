@@ -199,6 +199,10 @@ def _warm(one: Any, sample: Sample) -> None:
     one(sample)
 
 
+#: the most local worker processes: each is started at once, and more than the cores only share them
+MAX_WORKERS = 256
+
+
 def check_options(n: int, seed: int, workers: int | None, samples_option: str = "--samples",
                   seed_option: str = "--seed", workers_option: str = "--workers") -> None:
     """Refuse a bad sample count, seed or worker count (one-line errors naming the option, or the argument of a
@@ -207,8 +211,8 @@ def check_options(n: int, seed: int, workers: int | None, samples_option: str = 
         raise WetclutchError(f"{samples_option} must be >= 0 (got {n})")
     if check_integer(seed, seed_option) < 0:
         raise WetclutchError(f"{seed_option} must be >= 0 (got {seed})")
-    if workers is not None and check_integer(workers, workers_option) < 1:
-        raise WetclutchError(f"{workers_option} must be >= 1 (got {workers})")
+    if workers is not None and not 1 <= check_integer(workers, workers_option) <= MAX_WORKERS:
+        raise WetclutchError(f"{workers_option} must be in 1..{MAX_WORKERS} (got {workers})")
 
 
 def _check_run(design: Design, plant: Params | None, ranges: list[ranges_mod.Range] | None,

@@ -44,7 +44,7 @@ body { font-family: system-ui, sans-serif; max-width: 1000px; margin: 1em auto; 
 table { border-collapse: collapse; margin: 0.6em 0; font-size: 0.9em; display: block; max-width: 100%; overflow-x: auto; }
 th, td { border: 1px solid #ccc; padding: 2px 7px; text-align: right; }
 th { background: #f0f0f0; }
-td:first-child { text-align: left; }
+th:first-child, td:first-child { text-align: left; }
 td.pass { background: #d9f2d9; color: #135e13; }
 td.fail { background: #f9d6d6; color: #8b0000; font-weight: bold; }
 code { font-size: 0.85em; background: #f4f4f4; padding: 0 2px; word-break: break-all; }

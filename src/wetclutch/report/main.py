@@ -55,7 +55,7 @@ def write(job: MainJob, out: str | Path, plant_file: str | Path | None = None,
     with atomic_dir(out) as d:
         for i, (res, base_res) in enumerate(launches):
             plot_launch(res.signals, res.truth, res.summary, d / f"launch_{i}.png", extra=base_res.signals,
-                        extra_label="baseline")
+                        extra_label="baseline", extra_summary=base_res.summary)
         plot_histograms(ver, d / "verify_launch.png")
         plot_histograms(base, d / "verify_baseline.png")
         write_json(d / "verify_launch.json", ver)

@@ -48,10 +48,11 @@ def plot_signals(df: pd.DataFrame, scenario: str, path: Path, title: str | None 
     plt.close(fig)
 
 
-def plot_rig(measured: pd.DataFrame, truth: pd.DataFrame, path: Path, title: str) -> None:
-    """A rig run: command, pressure, torque and speeds; measured (dots) over true (lines)."""
-    panels = [("Command u", ["u"]), ("Clutch pressure [bar]", ["p_clutch"]), ("Torque T_r [N m]", ["T_r"]),
-              ("Speeds [rad/s]", ["omega_p", "omega_1", "omega_s"])]
+def plot_rig(measured: pd.DataFrame, truth: pd.DataFrame, path: Path, title: str, u_unit: str | None = None) -> None:
+    """A rig run: command, pressure, torque and speeds; measured (dots) over true (lines). ``u_unit``: the
+    command's unit (V or duty)."""
+    panels = [(f"Command u [{u_unit}]" if u_unit else "Command u", ["u"]), ("Clutch pressure [bar]", ["p_clutch"]),
+              ("Torque T_r [N m]", ["T_r"]), ("Speeds [rad/s]", ["omega_p", "omega_1", "omega_s"])]
     panels = [(n, [c for c in cols if c in measured.columns]) for n, cols in panels]
     if "T_plate" in truth.columns:
         panels.append(("Clutch plate temperature [C]", ["T_plate"]))
@@ -74,7 +75,7 @@ def plot_rig(measured: pd.DataFrame, truth: pd.DataFrame, path: Path, title: str
 
 
 def plot_launch(signals: pd.DataFrame, truth: pd.DataFrame, summary: dict, path: Path, extra: pd.DataFrame | None = None,
-                extra_label: str = "baseline") -> None:
+                extra_label: str = "baseline", extra_summary: dict | None = None) -> None:
     """A launch: request and axle torque, pressure, valve input, speeds, plate temperature (``extra``: a second
     launch to compare).
 
@@ -90,6 +91,8 @@ def plot_launch(signals: pd.DataFrame, truth: pd.DataFrame, summary: dict, path:
         The measured signals of a second launch, drawn in the panels of torque, pressure and valve input.
     extra_label
         What the second launch is.
+    extra_summary
+        The second launch's figures: its verdicts go into the title beside the first's.
     """
     heat = "T_plate" in truth.columns
     fig, axes = plt.subplots(5 if heat else 4, 1, figsize=(9, 11 if heat else 9), sharex=True)
@@ -138,6 +141,9 @@ def plot_launch(signals: pd.DataFrame, truth: pd.DataFrame, summary: dict, path:
     title = "launch" + (f" ({what})" if what else "")
     if verdicts:
         title += f"\n{name + ': ' if name else ''}{verdicts}"
+    if extra is not None and extra_summary and extra_summary.get("requirements"):
+        title += f"\n{extra_label}: " + ", ".join(f"{k} {'pass' if v else 'FAIL'}"
+                                                  for k, v in extra_summary["requirements"].items())
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

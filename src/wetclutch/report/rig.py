@@ -15,4 +15,5 @@ def write(result: RigResult, out: str | Path) -> None:
     with atomic_dir(out) as d:
         write_measurement(d, result.measured, result.meta["units"], result.meta)
         write_csv(result.truth, d / "truth.csv")
-        plot_rig(result.measured, result.truth, d / "plot.png", title=f"wetclutch rig {result.meta['experiment']}")
+        plot_rig(result.measured, result.truth, d / "plot.png", title=f"wetclutch rig {result.meta['experiment']}",
+                 u_unit=result.meta.get("units", {}).get("u"))

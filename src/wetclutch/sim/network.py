@@ -27,7 +27,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..errors import SimulationError
+from ..errors import SimulationError, WetclutchError
 from ..physics import actuator as act_mod
 from ..physics import thermal as th_mod
 from . import coldstart
@@ -419,7 +419,10 @@ class Trajectory:
         for i, it in enumerate(items):
             if it.name == name:
                 return i
-        raise KeyError(name)
+        # a name of another kind of element, or a typo: one line with the names there are
+        kind = type(items[0]).__name__.strip("_").lower() if items else "element"
+        raise WetclutchError(f"no {kind} named {name!r} in the network (its {kind} names: "
+                             f"{', '.join(it.name for it in items) or 'none'})")
 
     def _aux(self, block: int, index: int) -> np.ndarray:
         net = self.network
