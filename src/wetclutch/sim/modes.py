@@ -270,7 +270,7 @@ def _implied(G, x, net, k):
     return True
 
 
-@jit
+@jit_inline
 def _evaluate(t, x, net, ext, ws):
     """The right-hand side of the modes being decided (into ``ws.dx``, ``ws.aux``); False if the motion is not
     determined.
@@ -278,23 +278,30 @@ def _evaluate(t, x, net, ext, ws):
     A lossy gear whose constraint the locks and gears beside it already hold (beside a locked clutch, or in
     parallel with another gear) leaves the motion open: its torque splits the load with them, and its loss,
     hence the acceleration, depends on the split. Of the splits within every element's limits the engine takes
-    the one in which such gears carry no torque (:data:`~wetclutch.sim.workspace.IDLE`; a redundant lossy gear
-    is idled in turn until the motion is determined, each kept idle only if the others imply its constraint).
+    the one in which such gears carry no torque (:data:`~wetclutch.sim.workspace.IDLE`; :func:`_idle_redundant`).
     The locks then carry the load as without the gear; where that is more than a clutch holds, the clutch gives
     way (:func:`_release_worst`), the gear's constraint is its own again, and it carries what the clutch's
     sliding torque does not, with its loss. Idling is decided afresh at each evaluation here, so a gear that
-    idled stands in once the locks beside it let go.
-
-    A real call: it runs at mode decisions only, and compiled once it keeps the right-hand side's call sites out
-    of :func:`settle`."""
-    clm = ws.clm
+    idled stands in once the locks beside it let go."""
     grm = ws.grm
     for k in range(grm.shape[0]):
         if abs(grm[k]) == IDLE:
             grm[k] = 1 if grm[k] > 0 else -1
-    if rhs_call(t, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, clm, grm), bool(True)):
+    if rhs_call(t, x, net, ext, ws, ws.dx, ws.aux, stale(ws.fact, ws.clm, grm), bool(True)):
         return True
     forget(ws.fact)
+    return _idle_redundant(t, x, net, ext, ws)
+
+
+@jit
+def _idle_redundant(t, x, net, ext, ws):
+    """Idle the redundant lossy gears (see :func:`_evaluate`) in turn until the motion is determined, each kept idle
+    only if the others imply its constraint; False if none does it.
+
+    A real call, not inlined: it runs only where the modes leave the motion open, and compiled once it keeps its
+    right-hand side's call sites out of :func:`settle`."""
+    clm = ws.clm
+    grm = ws.grm
     bad = ws.istate[IS_BAD_BODY]
     idled = False
     for k in range(grm.shape[0]):
