@@ -246,7 +246,8 @@ def _cmd_launch(args: argparse.Namespace) -> None:
     s = res.summary
     req = ", ".join(f"{k} {'pass' if v else 'FAIL'}" for k, v in s["requirements"].items())
     fmt = lambda v, f: "-" if v is None else format(v, f)  # noqa: E731
-    print(f"launch {d.kind}: ess {fmt(s['steady_state_error_pct'], '.2f')} %, t95 {fmt(s['t95_s'], '.3f')} s "
+    print(f"launch ({d.kind} controller): ess {fmt(s['steady_state_error_pct'], '.2f')} %, "
+          f"t95 {fmt(s['t95_s'], '.3f')} s "
           f"(settled {fmt(s['t95_settled_s'], '.3f')} s), overshoot {fmt(s['overshoot_pct'], '.1f')} %, "
           f"creep {fmt(s['creep_Nm'], '.1f')} N m, t_sync {fmt(s['t_sync_s'], '.2f')} s, "
           f"plate {s['T_plate_peak_C']:.1f} C; {req} -> {args.out}")
@@ -481,7 +482,8 @@ def build_parser() -> argparse.ArgumentParser:
     ver = sub.add_parser("verify", help="Monte Carlo and corner-case verification of a launch controller")
     _out_arg(ver)
     ver.add_argument("--samples", type=int, default=1000, metavar="N", help="random samples (default 1000; plus corners)")
-    ver.add_argument("--seed", type=int, default=0, metavar="S")
+    ver.add_argument("--seed", type=int, default=0, metavar="S",
+                     help="seed of the random samples and their noise (default 0)")
     ver.add_argument("--workers", type=int, metavar="W", help="processes (default: all cores)")
     _scheduler_arg(ver)
     ver.add_argument("--ranges", metavar="R.toml", help="what varies and how (default: the shipped ranges file)")
@@ -500,8 +502,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="random samples verifying the launch controller (default 1000; plus corners)")
     rep.add_argument("--baseline-samples", type=int, default=200, metavar="N",
                      help="random samples verifying the baseline (default 200; plus corners)")
-    rep.add_argument("--seed", type=int, default=0, metavar="S")
-    rep.add_argument("--workers", type=int, metavar="W")
+    rep.add_argument("--seed", type=int, default=0, metavar="S",
+                     help="seed of the random samples and their noise (default 0)")
+    rep.add_argument("--workers", type=int, metavar="W", help="processes (default: all cores)")
     _scheduler_arg(rep)
     rep.add_argument("--ranges", metavar="R.toml", help="what varies and how (default: the shipped ranges file)")
     rep.add_argument("--sequence", type=int, default=3, metavar="N",
@@ -510,26 +513,28 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--baseline-file", metavar="B.toml", help="the baseline (default: designed on the plant)")
     _lockup_arg(rep)
     _param_args(rep)
-    rep.add_argument("--quiet", action="store_true")
+    rep.add_argument("--quiet", action="store_true", help="no progress bar")
     rep.set_defaults(func=_cmd_report)
 
     tun = sub.add_parser("tune", help="tune a controller's gains against the requirements (CMA-ES over training "
                                       "plants, verified on held-out ones): controller.toml, tune.md")
     _out_arg(tun)
     tun.add_argument("--samples", type=int, default=40, metavar="N", help="training plants (default 40)")
-    tun.add_argument("--seed", type=int, default=0, metavar="S", help="seed of the training plants")
+    tun.add_argument("--seed", type=int, default=0, metavar="S",
+                     help="seed of the training plants (default 0; the validation plants take S + 1)")
     tun.add_argument("--heldout-samples", type=int, default=200, metavar="N", help="held-out plants (default 200)")
-    tun.add_argument("--heldout-seed", type=int, default=1000, metavar="S")
-    tun.add_argument("--generations", type=int, default=8, metavar="G")
-    tun.add_argument("--popsize", type=int, default=8, metavar="P")
+    tun.add_argument("--heldout-seed", type=int, default=1000, metavar="S",
+                     help="seed of the held-out plants (default 1000)")
+    tun.add_argument("--generations", type=int, default=8, metavar="G", help="CMA-ES generations (default 8)")
+    tun.add_argument("--popsize", type=int, default=8, metavar="P", help="candidates per generation (default 8)")
     tun.add_argument("--sequence", type=int, default=3, metavar="N",
                      help="launches per plant, the adaptation carried over; judged on the last (default 3)")
     tun.add_argument("--state", metavar="FILE", help="save the search here after each generation; resume from it")
-    tun.add_argument("--workers", type=int, metavar="W")
+    tun.add_argument("--workers", type=int, metavar="W", help="processes (default: all cores)")
     tun.add_argument("--ranges", metavar="R.toml", help="what varies and how (default: the shipped ranges file)")
     _controller_args(tun)
     _param_args(tun)
-    tun.add_argument("--quiet", action="store_true")
+    tun.add_argument("--quiet", action="store_true", help="no progress bar")
     tun.set_defaults(func=_cmd_tune)
 
     idf = sub.add_parser("identify", help="identify the clutch from measurement files; write identified.json, "
