@@ -210,3 +210,16 @@ def test_counts_take_their_nouns():
     assert not re.search(r"\b1 (random clutches|launches|corners|times)\b", md)
     assert tune_report._launched(1) == "each launched once"
     assert tune_report._launched(3).startswith("each launched 3 times, the adaptation carried over")
+
+
+def test_a_step_model_that_does_not_describe_its_step_says_so():
+    from types import SimpleNamespace
+
+    from wetclutch.report.identify import step_rows
+
+    rec = SimpleNamespace(path="runs/step41/measured.csv")
+    good = SimpleNamespace(rec=rec, order=1, gain=1e5, theta=0.02, params={"tau_s": 0.03}, vaf=97.0)
+    poor = SimpleNamespace(rec=rec, order=2, gain=1e5, theta=0.0, params={"omega_n_rad_s": 2.8e6, "zeta": 1.1e5},
+                           vaf=37.0)
+    rows = step_rows([good, poor])
+    assert rows[0].endswith("| 97.0 |") and rows[1].endswith("| 37.0 (poor fit: not used) |")

@@ -24,6 +24,10 @@ from .estimate import source
 from .result import Identification
 from .static import GAIN_GROUPS, static_gain
 
+#: the least VAF (%) of a step's first-order model that the pressure prediction takes: a step whose response is not
+#: one of a first-order lag plus dead time (a fill, then the plates' contact) is fitted, shown, and not used
+STEP_VAF_MIN = 50.0
+
 
 def scores(measured: np.ndarray, predicted: np.ndarray) -> dict[str, float]:
     """NRMSE (RMS error / range of ``measured``) and VAF in % of a prediction."""
@@ -76,7 +80,7 @@ def validate(result: Identification) -> list[dict[str, Any]]:
         if curve is None:
             continue
         models = [m for m in result.steps if m.rec is not rec and m.order == 1
-                  and (m.rec.config, m.rec.input_mode) == key and m.vaf > 50.0]
+                  and (m.rec.config, m.rec.input_mode) == key and m.vaf > STEP_VAF_MIN]
         tau = float(np.median([m.params["tau_s"] for m in models])) if models else None
         theta = float(np.median([m.theta for m in models])) if models else None
         pred = predict_pressure(rec.t, rec.data["u"], np.array(curve.value), curve.extra["range_bar"], tau, theta)

@@ -14,6 +14,7 @@ from .. import params as params_mod
 from ..ident.dynamics import MODEL_NAMES
 from ..ident.estimate import BAR
 from ..ident.result import PARAMS_FROM, Identification
+from ..ident.validation import STEP_VAF_MIN
 from ..output import atomic_dir, write_json
 from . import html
 from .plots import plt
@@ -98,10 +99,10 @@ def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
                   f"{measured_cell(o.p_contact / BAR, o.p_contact_se / BAR, 3)} |" for o in result.onsets]
     if result.steps:
         lines += ["", "### Pressure models fitted to steps and relaxations", "",
+                  f"A model whose VAF is {STEP_VAF_MIN:g} % or less does not describe its step (a fill and the plates' "
+                  "contact are no low-order lag): shown, not used; its parameters mean little.", "",
                   "| file | model | gain [bar/unit] | dead time [s] | parameters | VAF [%] |", "|---|---|---|---|---|---|"]
-        for m in result.steps:
-            par = ", ".join(f"{k} {v:.4g}" for k, v in m.params.items())
-            lines.append(f"| {m.rec.path} | {MODEL_NAMES[m.order]} | {m.gain / BAR:.4g} | {m.theta:.4f} | {par} | {m.vaf:.1f} |")
+        lines += step_rows(result.steps)
     if result.responses:
         lines += ["", "### Frequency response (command to pressure)", "",
                   "| file | band [Hz] | fitted gain [bar/unit] | dead time [s] | omega_n [rad/s] | zeta |", "|---|---|---|---|---|---|"]
@@ -131,6 +132,17 @@ def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
     lines += ["", "## Plots", ""]
     lines += [f"![{title}]({name})" for name, title in plots]
     return "\n".join(lines) + "\n"
+
+
+def step_rows(steps: list) -> list[str]:
+    """The table rows of the step models: a model that does not describe its step (VAF at most
+    :data:`~wetclutch.ident.validation.STEP_VAF_MIN`) says so in its VAF cell."""
+    rows = []
+    for m in steps:
+        par = ", ".join(f"{k} {v:.4g}" for k, v in m.params.items())
+        vaf = f"{m.vaf:.1f}" + (" (poor fit: not used)" if not m.vaf > STEP_VAF_MIN else "")
+        rows.append(f"| {m.rec.path} | {MODEL_NAMES[m.order]} | {m.gain / BAR:.4g} | {m.theta:.4f} | {par} | {vaf} |")
+    return rows
 
 
 def _save(fig: plt.Figure, path: Path) -> None:
