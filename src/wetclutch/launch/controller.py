@@ -1165,7 +1165,8 @@ def crept(ctrl: np.ndarray, cs: np.ndarray, creep_Nm: float) -> bool:
 
 def output_inertia(cs: np.ndarray) -> float | None:
     """The clutch output's inertia (kg m^2) a launch measured (see :data:`EST_N`), or None where its window was not
-    full or the output's acceleration too small to show it."""
+    full or the output's acceleration too small to show it. A negative fit is 0: an output too light to show against
+    the sensors' noise, which the next launch treats as light (two stages, no S-curve), as it should."""
     if cs[CS_EST_N] < EST_N:
         return None
     j1 = _inertia_fit(cs)
