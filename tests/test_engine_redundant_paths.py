@@ -122,7 +122,7 @@ def test_gear_chain_on_a_spring_locked_through_a_clutch_turns_back_at_each_stand
 
 
 def _sine_chain(J2: float, brake: float) -> Network:
-    # the network: b1 (0.5) driven by 1 + 8 sin(2 pi 0.3 t) -ideal gear 0.5- b2 -clutch 4 N m- b3 (2)
+    # a sine-driven chain: b1 (0.5) driven by 1 + 8 sin(2 pi 0.3 t) -ideal gear 0.5- b2 -clutch 4 N m- b3 (2)
     # on a spring (k 5, d 0.3) to the ground, with a brake
     net = Network()
     b1 = net.body("b1", 0.5)
