@@ -223,3 +223,12 @@ def test_a_step_model_that_does_not_describe_its_step_says_so():
                            vaf=37.0)
     rows = step_rows([good, poor])
     assert rows[0].endswith("| 97.0 |") and rows[1].endswith("| 37.0 (poor fit: not used) |")
+
+
+def test_the_sample_table_names_each_range_column_with_what_its_values_are():
+    from wetclutch.launch import ranges
+    from wetclutch.report.verify import value_column
+
+    cols = {r.name: value_column({"name": r.name, "how": r.how, "unit": r.unit}) for r in ranges.load()}
+    assert cols["kiss_point"] == "kiss_point_offset_Pa" and cols["fill_volume"] == "fill_volume_factor"
+    assert cols["oil_temp"] == "oil_temp_C" and cols["request"] == "request_Nm" and cols["cvt_ratio"] == "cvt_ratio"

@@ -309,6 +309,18 @@ def bins_table(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def value_column(rg: dict[str, Any]) -> str:
+    """The ``samples.csv`` column of range ``rg`` (as in ``verify.json``), named with what its values are: a factor
+    on the plant's value (``fill_volume_factor``), an offset (``kiss_point_offset_Pa``) or a value in its unit
+    (``oil_temp_C``, ``request_Nm``); a value without a unit keeps the range's name."""
+    unit = rg.get("unit", "").replace(" ", "")
+    if rg["how"] == "rel":
+        return f"{rg['name']}_factor"
+    if rg["how"] == "offset":
+        return f"{rg['name']}_offset" + (f"_{unit}" if unit not in ("", "-") else "")
+    return rg["name"] + (f"_{unit}" if unit not in ("", "-") else "")
+
+
 def plant_named(plant: Params, plant_file: str | Path | None, changes: Sequence[str] = ()) -> str:
     """Where a plant came from, as a report names it: its parameter file (and ``--set`` changes), or whether it is the
     default one."""
@@ -346,7 +358,9 @@ def write(result: dict[str, Any], out: str | Path, design: Design, plant: Params
         md = ("# Verification\n\n" + head + verify_table(result) + "\n\n## Pass rate per range bin\n\n"
               + bins_table(result) + "\n\n![histograms](histograms.png)\n")
         (d / "verify.md").write_text(md)
-        rows = [{"index": r["index"], "corner": r["corner"], **r["values"], **r["metrics"], **r["requirements"],
+        named = {rg["name"]: value_column(rg) for rg in result["ranges"]}
+        rows = [{"index": r["index"], "corner": r["corner"], **{named.get(k, k): v for k, v in r["values"].items()},
+                 **r["metrics"], **r["requirements"],
                  "all_pass": r["all_pass"],
                  # the first launch's verdict and the slams of a sequence: the figures verify.md states about them
                  # can then be recomputed from this file alone
