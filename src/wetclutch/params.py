@@ -84,7 +84,8 @@ from __future__ import annotations
 import os
 import tomllib
 import weakref
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -407,6 +408,16 @@ class Rig(_Section):
                           le=OIL_TEMP_RANGE_C[1])
 
 
+@contextmanager
+def _in_one_line(section: str = "") -> Iterator[None]:
+    """pydantic's refusal inside the block as a one-line :class:`ParameterError` naming the parameter (its path
+    below ``section``, if given)."""
+    try:
+        yield
+    except ValidationError as err:
+        raise ParameterError(_one_line(err, section)) from None
+
+
 class _RefusesInOneLine(type(BaseModel)):
     """The metaclass of :class:`Params`: ``Params(...)`` refuses a value as a one-line :class:`ParameterError`.
 
@@ -414,10 +425,8 @@ class _RefusesInOneLine(type(BaseModel)):
     """
 
     def __call__(cls, *args: Any, **kwargs: Any) -> Any:
-        try:
+        with _in_one_line():
             return super().__call__(*args, **kwargs)
-        except ValidationError as err:
-            raise ParameterError(_one_line(err)) from None
 
 
 class Params(_Section, metaclass=_RefusesInOneLine):
@@ -470,18 +479,14 @@ class Params(_Section, metaclass=_RefusesInOneLine):
     @classmethod
     def model_validate(cls, obj: Any, *args: Any, **kwargs: Any) -> Params:
         """pydantic's, with a refusal as a one-line :class:`ParameterError` naming the parameter."""
-        try:
+        with _in_one_line():
             return super().model_validate(obj, *args, **kwargs)
-        except ValidationError as err:
-            raise ParameterError(_one_line(err)) from None
 
     @classmethod
     def model_validate_json(cls, json_data: Any, *args: Any, **kwargs: Any) -> Params:
         """pydantic's, with a refusal as a one-line :class:`ParameterError` naming the parameter."""
-        try:
+        with _in_one_line():
             return super().model_validate_json(json_data, *args, **kwargs)
-        except ValidationError as err:
-            raise ParameterError(_one_line(err)) from None
 
     def __deepcopy__(self, memo: dict[int, Any] | None = None) -> Params:
         new = super().__deepcopy__(memo)
@@ -527,10 +532,8 @@ def _section_name(kind: type[_Section]) -> str:
 
 def _build(cls: type[_Section], data: dict[str, Any]) -> Any:
     """``cls`` validated from ``data``; a refusal is a one-line :class:`ParameterError` naming the parameter."""
-    try:
+    with _in_one_line(_section_name(cls)):
         return cls.model_validate(data)
-    except ValidationError as err:
-        raise ParameterError(_one_line(err, _section_name(cls))) from None
 
 
 def lowest_mu(f: Friction, slip_max: float) -> tuple[float, float]:

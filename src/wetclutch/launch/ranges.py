@@ -23,6 +23,7 @@ turn ranges into values; :func:`apply` puts values into a plant.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import tomllib
 from dataclasses import dataclass, replace
@@ -97,11 +98,16 @@ def _number(where: str, raw: dict[str, Any], key: str) -> float:
 CONDITION_UNITS = {"oil_temp_C": "C", "t_ref": "N m", "noise_scale": "-"}
 
 
+@functools.cache
+def _units() -> dict[str, str]:
+    """Every parameter's SI unit by dotted path (:func:`wetclutch.params.describe`), made once: a ranges file
+    asks for one per range."""
+    return {path: unit for path, _, unit, _ in describe(Params())}
+
+
 def _target_unit(target: str) -> str:
-    """The SI unit of ``target``'s values (a parameter's from :func:`wetclutch.params.describe`)."""
-    if target in CONDITION_UNITS:
-        return CONDITION_UNITS[target]
-    return next(u for path, _, u, _ in describe(Params()) if path == target)
+    """The SI unit of ``target``'s values."""
+    return CONDITION_UNITS[target] if target in CONDITION_UNITS else _units()[target]
 
 
 def _check_unit(where: str, target: str, how: str, unit: str) -> None:
