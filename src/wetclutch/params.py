@@ -126,7 +126,19 @@ def _inconsistent(message: str) -> PydanticCustomError:
     return PydanticCustomError(_INCONSISTENT, "{message}", {"message": message})
 
 
-class _Section(BaseModel):
+class _RefusesInOneLine(type(BaseModel)):
+    """The metaclass of the sections and of :class:`Params`: ``Driveline(ratio=-1)``, ``Params(...)`` refuse a value
+    as a one-line :class:`ParameterError` naming it as a parameter file would (``driveline.ratio``).
+
+    (An ``__init__`` of its own would do the same, but pydantic's validation then runs each record's checks twice.)
+    """
+
+    def __call__(cls, *args: Any, **kwargs: Any) -> Any:
+        with _in_one_line(_section_name(cls)):
+            return super().__call__(*args, **kwargs)
+
+
+class _Section(BaseModel, metaclass=_RefusesInOneLine):
     # strict: a boolean or a string given for a number is a mistake in the file or on the command line, not a
     # number (pydantic's lax mode reads ``true`` as 1.0 and ``"0.5"`` as 0.5); integers still pass as floats.
     # allow_inf_nan off: every parameter is a finite number, and NaN is refused as such, not by a failed bound.
@@ -160,6 +172,18 @@ class _Section(BaseModel):
                 self.__dict__[name] = old
                 raise ParameterError(err.message()) from None
 
+    @classmethod
+    def model_validate(cls, obj: Any, *args: Any, **kwargs: Any) -> Any:
+        """pydantic's, with a refusal as a one-line :class:`ParameterError` naming the parameter."""
+        with _in_one_line(_section_name(cls)):
+            return super().model_validate(obj, *args, **kwargs)
+
+    @classmethod
+    def model_validate_json(cls, json_data: Any, *args: Any, **kwargs: Any) -> Any:
+        """pydantic's, with a refusal as a one-line :class:`ParameterError` naming the parameter."""
+        with _in_one_line(_section_name(cls)):
+            return super().model_validate_json(json_data, *args, **kwargs)
+
     def model_copy(self, *, update: Mapping[str, Any] | None = None, deep: bool = True) -> Any:
         """A copy that shares nothing with this one (changing one never changes the other, whatever ``deep``), with
         the values of ``update`` (field name -> value) put in and checked like any other.
@@ -174,7 +198,7 @@ class _Section(BaseModel):
             if not isinstance(update, Mapping):
                 raise ParameterError(f"update must be a mapping of field name -> value, not {type(update).__name__}")
             data |= {k: v.model_dump() if isinstance(v, BaseModel) else _plain(v) for k, v in update.items()}
-        return _build(type(self), data)
+        return type(self).model_validate(data)
 
 
 class Driveline(_Section):
@@ -418,18 +442,7 @@ def _in_one_line(section: str = "") -> Iterator[None]:
         raise ParameterError(_one_line(err, section)) from None
 
 
-class _RefusesInOneLine(type(BaseModel)):
-    """The metaclass of :class:`Params`: ``Params(...)`` refuses a value as a one-line :class:`ParameterError`.
-
-    (An ``__init__`` of its own would do the same, but pydantic's validation then runs each record's checks twice.)
-    """
-
-    def __call__(cls, *args: Any, **kwargs: Any) -> Any:
-        with _in_one_line():
-            return super().__call__(*args, **kwargs)
-
-
-class Params(_Section, metaclass=_RefusesInOneLine):
+class Params(_Section):
     """All parameters of the rig and its scenarios, SI units.
 
     ``Params(driveline={"ratio": 0.6})``, ``Params.model_validate(...)``, ``model_copy(update=...)`` and assignments
@@ -476,18 +489,6 @@ class Params(_Section, metaclass=_RefusesInOneLine):
                                 f"slip 0..{span:g} rad/s (0..driveline.omega_p0); it is {mu:.3g} at {slip:.4g} rad/s")
         return self
 
-    @classmethod
-    def model_validate(cls, obj: Any, *args: Any, **kwargs: Any) -> Params:
-        """pydantic's, with a refusal as a one-line :class:`ParameterError` naming the parameter."""
-        with _in_one_line():
-            return super().model_validate(obj, *args, **kwargs)
-
-    @classmethod
-    def model_validate_json(cls, json_data: Any, *args: Any, **kwargs: Any) -> Params:
-        """pydantic's, with a refusal as a one-line :class:`ParameterError` naming the parameter."""
-        with _in_one_line():
-            return super().model_validate_json(json_data, *args, **kwargs)
-
     def __deepcopy__(self, memo: dict[int, Any] | None = None) -> Params:
         new = super().__deepcopy__(memo)
         _hold(new)
@@ -528,12 +529,6 @@ def _holder(section: _Section) -> Params | None:
 def _section_name(kind: type[_Section]) -> str:
     """The name of a section of kind ``kind`` in a :class:`Params` (``driveline``), or "" for a whole record."""
     return next((name for name, info in Params.model_fields.items() if info.annotation is kind), "")
-
-
-def _build(cls: type[_Section], data: dict[str, Any]) -> Any:
-    """``cls`` validated from ``data``; a refusal is a one-line :class:`ParameterError` naming the parameter."""
-    with _in_one_line(_section_name(cls)):
-        return cls.model_validate(data)
 
 
 def lowest_mu(f: Friction, slip_max: float) -> tuple[float, float]:

@@ -6,10 +6,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from pydantic import ValidationError
 from scipy.ndimage import maximum_filter1d
 
-from ..errors import WetclutchError
+from ..errors import ParameterError, WetclutchError
 from ..params import Driveline, Params
 from ..physics import friction as law
 from .estimate import BAR, Estimate, aligned, inflation, robust_std, smooth, source
@@ -59,7 +58,7 @@ def commanded_ratio(rec: Recording) -> float | None:
         return None
     try:
         return Driveline(ratio=driveline["ratio"]).ratio
-    except ValidationError:
+    except ParameterError:
         return None
 
 

@@ -129,6 +129,15 @@ class Adaptation:
                 + tomli_w.dumps(top | {"band": bands}))
 
 
+#: the least kiss point (Pa) a state may hold. The model bounds a kiss point only by zero: the design's ``p_kiss``
+#: takes 0..5e6 Pa, and the ranges' kiss point offset of -0.3 bar stops where the prestress reaches zero (the
+#: stroke's ``k_reset x_contact / A_p`` left, 0.2 bar on the built-in rig). The floor is what a launch can learn
+#: instead: a kiss point is a pressure the controller measured, and 0.01 bar is half the pressure sensor's noise
+#: (0.02 bar, :data:`wetclutch.rig.sensors.DEFAULT_SENSORS`) and a thirtieth of the ranges' spread of kiss points.
+#: A kiss point written in bar is at most 50 (the 5e6 Pa a state may hold), far below it.
+KISS_MIN_PA = 0.01e5
+
+
 def loads(text: str, source: str = "adaptation file") -> Adaptation:
     """An adaptation state from its TOML text (one-line errors naming the field)."""
     try:
@@ -174,6 +183,9 @@ def loads(text: str, source: str = "adaptation file") -> Adaptation:
             raise WetclutchError(f"{where}: band {lo:g}..{hi:g} C is given twice (band[{list(kiss).index(b)}] before)")
         if not 0.0 <= v <= 5e6:
             raise WetclutchError(f"{where}.kiss_Pa: {v:g} Pa is outside 0..5e6")
+        if v < KISS_MIN_PA:
+            raise WetclutchError(f"{where}.kiss_Pa: {v:g} Pa is below {KISS_MIN_PA:g} Pa, the least kiss point a "
+                                 "state may hold (in Pa, not bar?)")
         if isinstance(n, bool) or not isinstance(n, int) or n < 0:
             raise WetclutchError(f"{where}.launches: must be a whole number >= 0 (got {shown(n)})")
         kiss[b], count[b] = float(v), n

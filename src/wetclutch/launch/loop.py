@@ -18,6 +18,7 @@ The clutch is in standby from t = 0; the torque request comes at
 
 from __future__ import annotations
 
+import csv
 import functools
 import os
 from dataclasses import dataclass, field, replace
@@ -194,7 +195,8 @@ class Conditions:
     Attributes
     ----------
     t_ref : float
-        Requested axle torque ``T_r``, N m.
+        Requested axle torque ``T_r``, N m, of a ``step`` or ``ramp`` profile. A CSV profile gives its own
+        request: another ``t_ref`` than the default beside it is refused.
     profile : str or Path
         ``step``, ``ramp`` (linear over :data:`RAMP_TIME`), or a CSV file with
         columns ``time`` (s, from the request) and ``t_ref`` (N m).
@@ -274,6 +276,11 @@ class Conditions:
             check_oil_temp(c.oil_temp_C, name("oil_temp_C"))
         if c.profile not in PROFILES and not Path(c.profile).is_file():
             raise WetclutchError(f"{name('profile')} must be step, ramp or an existing CSV file (got '{c.profile}')")
+        # the command line gives the default when --t-ref is left out (and refuses --t-ref beside a CSV profile
+        # itself): only a request other than the default shows that one was given
+        if c.profile not in PROFILES and c.t_ref != Conditions.t_ref:
+            raise WetclutchError(f"{name('t_ref')} {c.t_ref:g} N m is given with {name('profile')} '{c.profile}', "
+                                 f"which gives the request itself; leave {name('t_ref')} out")
         if c.seed < 0:
             raise WetclutchError(f"{name('seed')} must be >= 0 (got {c.seed})")
         if (why := condition_error("noise_scale", c.noise_scale, name("noise_scale"))) is not None:
@@ -319,7 +326,13 @@ def reference(cond: Conditions, t: np.ndarray) -> np.ndarray:
             tt = np.asarray(f["time"], dtype=float)
             rr = np.asarray(f["t_ref"], dtype=float)
         except (OSError, KeyError, ValueError, pd.errors.ParserError) as e:
+            if (malformed := _longer_than_header(cond.profile)) is not None:
+                raise WetclutchError(f"{where}: {malformed}") from None
             raise WetclutchError(f"{where}: needs numeric columns 'time' and 't_ref' ({type(e).__name__})") from None
+        # a first data row longer than the header makes pandas take the leading columns for an index and shift the
+        # rest under the wrong names (a later one fails to tokenize, above)
+        if not isinstance(f.index, pd.RangeIndex) and (malformed := _longer_than_header(cond.profile)) is not None:
+            raise WetclutchError(f"{where}: {malformed}")
         if tt.size < 2:
             raise WetclutchError(f"{where}: needs at least two rows (time, t_ref), has {tt.size}")
         for name, v in (("time", tt), ("t_ref", rr)):
@@ -333,6 +346,35 @@ def reference(cond: Conditions, t: np.ndarray) -> np.ndarray:
             raise WetclutchError(f"{where}: 't_ref' is 0 throughout: no torque is requested")
         r = np.interp(tau, tt, rr)
     return np.where(tau >= 0.0, r, 0.0)
+
+
+def _longer_than_header(path: str | os.PathLike) -> str | None:
+    """The first line of CSV file ``path`` with more fields than its header, said in a few words, or None (no such
+    line, or a file the csv module cannot read either: the caller's own message stands).
+
+    Parameters
+    ----------
+    path : str or Path
+        The profile's file.
+
+    Returns
+    -------
+    str or None
+        ``line 3 is malformed: it has 3 fields, the header 2``, or None.
+    """
+    try:
+        with open(path, encoding="utf-8-sig", newline="") as fh:
+            rows = csv.reader(fh)
+            # pandas skips blank lines, before the header too
+            header = next((row for row in rows if row), None)
+            if header is None:
+                return None
+            for row in rows:
+                if len(row) > len(header):
+                    return f"line {rows.line_num} is malformed: it has {len(row)} fields, the header {len(header)}"
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return None
+    return None
 
 
 @dataclass

@@ -8,10 +8,14 @@ path of :class:`~wetclutch.params.Params`) or one launch condition (:data:`CONDI
   ``"offset"``: added to the plant's value;
 * ``dist = "uniform"`` over ``[low, high]``, or ``"normal"`` with ``low`` and ``high`` at
   minus and plus two standard deviations (truncated there);
-* ``corner = true``: the corner cases take this range's extremes;
+* ``corner = true``: the corner cases take this range's extremes (its one value where ``low == high``: a range
+  pinned to a value holds it in every corner case, each case made once);
 * ``unit``, if given, labels the values in reports: the target's SI unit (``C``, ``N m``, ``-`` for the conditions),
   or ``-`` for the factors of ``rel``; another (a range labelled in bar) is refused, since the values are read in
   the SI unit whatever the label. A ``rel`` factor is never negative (offsets written under ``rel`` are refused).
+
+A quantity is varied by one range: the oil temperature, both a parameter (``rig.oil_temp_C``) and a condition
+(``oil_temp_C``), by one of the two.
 
 A condition's range must lie within what a launch takes (:func:`wetclutch.launch.loop.condition_error`): every value drawn lies
 between ``low`` and ``high``, so a file whose ends lie within can draw nothing else.
@@ -178,6 +182,13 @@ def parse(data: dict[str, Any], source: str = "ranges") -> list[Range]:
     dup = next((t for t in targets if targets.count(t) > 1), None)
     if dup:
         raise _err(source, f"target '{dup}' is varied by two ranges")
+    # the oil temperature is a parameter and a condition: a launch given the condition runs at it whatever the
+    # plant's, so the parameter's range would be drawn and reported but never run
+    both = [next((r for r in out if r.target == t), None) for t in ("rig.oil_temp_C", "oil_temp_C")]
+    if None not in both:
+        names = [r.name.encode("unicode_escape").decode() for r in both]
+        raise _err(source, f"[{names[0]}] (target 'rig.oil_temp_C') and [{names[1]}] (target 'oil_temp_C') both vary "
+                   "the oil temperature, and a launch takes the condition's: keep one of the two")
     if sum(r.corner for r in out) > 10:
         raise _err(source, "more than 10 corner ranges (2^n corner cases)")
     return out
@@ -217,7 +228,9 @@ def nominal(ranges: list[Range], plant: Params, conditions: dict[str, float]) ->
 def corners(ranges: list[Range]) -> list[dict[str, float]]:
     """Every combination of the corner ranges' extremes (the other ranges left out: their nominal values)."""
     cr = [r for r in ranges if r.corner]
-    return [dict(zip([r.name for r in cr], combo)) for combo in itertools.product(*[(r.low, r.high) for r in cr])]
+    # a range pinned to one value (low == high) has one extreme: taken twice, every corner case would run twice
+    ends = [(r.low, r.high) if r.low != r.high else (r.low,) for r in cr]
+    return [dict(zip([r.name for r in cr], combo)) for combo in itertools.product(*ends)]
 
 
 def apply(ranges: list[Range], values: dict[str, float], plant: Params) -> tuple[Params, dict[str, float]]:

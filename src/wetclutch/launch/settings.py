@@ -21,7 +21,8 @@ Layout::
 naming the offending field; a file of another kind than asked for is refused; a key the
 file's writer does not write is refused, not ignored; the tables' axes lie within the oil
 temperatures and pressures a plant takes, the map's inputs within the valve's range and
-never falling as the pressure rises, and the kiss point below the supply's pressure). A setting
+never falling as the pressure rises, the kiss point below the supply's pressure, and a ``[plant]`` that is not
+empty: it is not read as the built-in rig). A setting
 that is not derived from the plant and is absent from the file (one written before the
 setting existed) takes the controller's default, its source saying so; a plant-derived one
 absent is an error.
@@ -118,8 +119,14 @@ def loads(text: str, source: str = "controller file", kind: str | None = None) -
     extra = sorted(set(given) - set(spec))
     if extra:
         raise _err(f"{source}: settings.{extra[0]}", f"unknown setting of the {k} controller")
+    designed_on = flatten(data["plant"])
+    # an empty [plant] would read as the built-in rig: no design writes one (it writes every parameter), and the
+    # settings derived from the plant, and any mismatch verified, would be taken from a plant the file never named
+    if not designed_on:
+        raise _err(source, "[plant] is empty: it must hold the parameter set the controller was designed on "
+                   "(wetclutch design writes it)")
     try:
-        plant = load_params(None, flatten(data["plant"]))
+        plant = load_params(None, designed_on)
     except ParameterError as e:
         raise _err(f"{source}: [plant]", str(e)) from None
     values, sources = {}, {}

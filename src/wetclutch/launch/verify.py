@@ -97,7 +97,8 @@ class Context:
         # full precision: a launch with stick/slip events is sensitive to the last digits
         sets = " ".join(f"--set {r.target}={_dotted(plant, r.target)!r}" for r in self.ranges if not r.is_condition)
         temp = plant.rig.oil_temp_C if cond.oil_temp_C is None else cond.oil_temp_C
-        return (f"wetclutch launch --out replay-{sample.index}{self.replay_args} --t-ref {cond.t_ref!r} "
+        request = f"--t-ref {cond.t_ref!r}" if cond.profile in launch.PROFILES else f"--profile {cond.profile}"
+        return (f"wetclutch launch --out replay-{sample.index}{self.replay_args} {request} "
                 f"--oil-temp {temp!r} --seed {sample.seed} --noise-scale {cond.noise_scale!r} {sets}").rstrip()
 
 
@@ -122,9 +123,13 @@ def samples(ctx: Context, n: int, seed: int, corners: bool = True) -> list[Sampl
 
 
 def nominal_grid(design: Design, profile: str = "step") -> tuple[np.ndarray, np.ndarray]:
-    """Settled t95 and overshoot of the design's nominal launch at :data:`NOMINAL_LEVELS` (interpolated between)."""
-    rows = [launch.nominal_response(design, launch.Conditions(t_ref=float(lv), profile=profile))
-            for lv in NOMINAL_LEVELS]
+    """Settled t95 and overshoot of the design's nominal launch at :data:`NOMINAL_LEVELS` (interpolated between);
+    a CSV profile, which gives the request itself, has one nominal launch for every level."""
+    if profile not in launch.PROFILES:
+        rows = [launch.nominal_response(design, launch.Conditions(profile=profile))] * len(NOMINAL_LEVELS)
+    else:
+        rows = [launch.nominal_response(design, launch.Conditions(t_ref=float(lv), profile=profile))
+                for lv in NOMINAL_LEVELS]
     return np.array([r.t95_settled_s for r in rows]), np.array([r.overshoot_pct for r in rows])
 
 
@@ -297,6 +302,11 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
     launch.Conditions(profile=profile).checked()
     plant = plant if plant is not None else design.plant
     rs, limited = ranges_mod.fit(ranges if ranges is not None else ranges_mod.load(), plant)
+    if profile not in launch.PROFILES:
+        # a CSV profile gives the request itself: a request range would be drawn and reported, never run
+        dropped = [r for r in rs if r.target == "t_ref"]
+        rs = [r for r in rs if r.target != "t_ref"]
+        limited = [*limited, *(f"{r.name}: not varied, the profile '{profile}' gives the request" for r in dropped)]
     ctx = Context(design, plant, rs, profile, replay_args + (f" --sequence {sequence}" if sequence > 1 else ""),
                   sequence, through_lockup, tuple(limited))
     workers = workers or os.cpu_count() or 1
