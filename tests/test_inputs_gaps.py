@@ -243,6 +243,18 @@ def test_a_pinned_corner_range_holds_its_value_in_each_corner_case_once():
     assert ranges.corners(rs) == [{"request": 150.0, "oil": t, "ratio": r} for t in (10.0, 100.0) for r in (0.4, 1.0)]
 
 
+def test_the_corner_limit_counts_the_ranges_that_make_corner_cases():
+    # ten spanning ranges make 1,024 cases, the most allowed; a pinned one beside them adds none, an eleventh doubles
+    spanning = {f"r{i}": _range(t, 1.0, 2.0) for i, t in enumerate(
+        ["driveline.J_p", "driveline.J_s", "driveline.J_1", "driveline.k_a", "driveline.d_a", "driveline.eta",
+         "engage.T_load", "hydraulics.p_supply", "hydraulics.A_p", "hydraulics.x_contact"])}
+    spanning["r7"] = _range("hydraulics.p_supply", 6e5, 8e5)
+    pinned = spanning | {"oil": _range("oil_temp_C", 40.0, 40.0)}
+    assert len(ranges.corners(ranges.parse(pinned))) == 1024
+    with pytest.raises(WetclutchError, match="more than 10 corner ranges"):
+        ranges.parse(spanning | {"oil": _range("oil_temp_C", 10.0, 100.0)})
+
+
 _corner_range = st.tuples(st.floats(0.5, 2.0), st.floats(0.0, 1.0), st.booleans()).map(
     lambda t: (t[0], t[0] + t[1] if t[2] else t[0]))
 

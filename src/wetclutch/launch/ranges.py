@@ -189,7 +189,8 @@ def parse(data: dict[str, Any], source: str = "ranges") -> list[Range]:
         names = [r.name.encode("unicode_escape").decode() for r in both]
         raise _err(source, f"[{names[0]}] (target 'rig.oil_temp_C') and [{names[1]}] (target 'oil_temp_C') both vary "
                    "the oil temperature, and a launch takes the condition's: keep one of the two")
-    if sum(r.corner for r in out) > 10:
+    # a range pinned to one value adds no corner cases
+    if sum(r.corner and r.low != r.high for r in out) > 10:
         raise _err(source, "more than 10 corner ranges (2^n corner cases)")
     return out
 
