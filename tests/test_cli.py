@@ -327,6 +327,9 @@ def test_counts_of_one_are_singular(tmp_path, capsys):
     assert main(["identify", str(rig / "measured.csv"), "--out", str(tmp_path / "id")]) == 0
     line = capsys.readouterr().out.strip().splitlines()[-1]
     assert line.startswith("identify: 1 file, 1 onset, ") and " 0 frequency responses" in line
+    # what it found, each entry a parameter comes from: a clutch step shows the friction law, the contact, the
+    # stroke's start and the open plates' drag before it
+    assert line.split("; ")[1].split(" -> ")[0] == "mu_slip_poly, contact_pressure_Pa, stroke_start_Pa, drag_20C"
 
 
 def test_tune_resume_with_other_settings_is_refused_and_cma_says_nothing(tmp_path, cli_refuses):

@@ -371,6 +371,7 @@ def _cmd_identify(args: argparse.Namespace) -> None:
     from rich.progress import Progress
 
     from .ident import identify
+    from .ident.result import PARAMS_FROM, REPORTED
     from .ident import recordings as channels
     from .report import identify as identify_report
 
@@ -388,8 +389,9 @@ def _cmd_identify(args: argparse.Namespace) -> None:
         bar.update(task, description=f"writing {args.out}")
         identify_report.write(res, args.out)
     e = res.estimates
-    found = ", ".join(k for k in ("mu_slip_poly", "contact_pressure_Pa", "stroke_start_Pa", "valve_gain", "clutch_gain_poly_bar_per_V",
-                                  "resonance_Hz", "ratio", "J_p", "J_1", "J_s") if k in e)
+    # what the files gave: the static maps and every entry that a parameter comes from (the oil temperature, the
+    # files' own, is no finding)
+    found = ", ".join(k for k in dict.fromkeys((*REPORTED, *PARAMS_FROM.values())) if k in e and k != "oil_temp_C")
     print(f"identify: {plural(len(recs), 'file')}, {plural(len(res.onsets), 'onset')}, "
           f"{plural(len(res.steps), 'step model')}, {plural(len(res.responses), 'frequency response')}; "
           f"{found or 'nothing'} -> {args.out}")

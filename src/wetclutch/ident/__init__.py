@@ -4,7 +4,8 @@
 and checked by :mod:`~wetclutch.ident.recordings`; each estimator is a module of its own
 (:mod:`~wetclutch.ident.onset`, :mod:`~wetclutch.ident.friction`,
 :mod:`~wetclutch.ident.static`, :mod:`~wetclutch.ident.dynamics`,
-:mod:`~wetclutch.ident.ringing`, :mod:`~wetclutch.ident.inertia`); :mod:`~wetclutch.ident.validation` predicts each file
+:mod:`~wetclutch.ident.ringing`, :mod:`~wetclutch.ident.inertia`, :mod:`~wetclutch.ident.drag`,
+:mod:`~wetclutch.ident.supply`); :mod:`~wetclutch.ident.validation` predicts each file
 from the others; :mod:`~wetclutch.ident.result` holds the outcome.
 """
 

@@ -16,8 +16,12 @@ recordings support:
   binned by pressure and by oil temperature;
 * the inertias ``J_p``, ``J_1``, ``J_s`` from the torque and speed balances of clutch
   runs (:func:`inertias`), where the data excite them;
+* the open plates' oil drag from the axle torque before each clutch run's first command change, at the run's oil
+  temperature, and referred to 20 C through the oil's viscosity (``drag_20C``, :mod:`wetclutch.ident.drag`);
 * static pressure versus command on the plateaus of steps and staircases, with the
-  hysteresis between up and down staircases (:func:`static_gain`, :func:`hysteresis`);
+  hysteresis between up and down staircases (:func:`static_gain`, :func:`hysteresis`), and the supply pressure
+  where the highest steps of a staircase give the same pressure (the valve wide open,
+  :func:`wetclutch.ident.supply.supply_pressure`);
 * low-order pressure models fitted to steps and relaxations (:func:`step_models`)
   and the frequency response from noise, multisine and chirp runs
   (:func:`frequency_response`), as python-control LTI objects;
@@ -42,16 +46,18 @@ import numpy as np
 from ..errors import WetclutchError, check_instance, check_integer, kind_of, named
 from ..params import Params
 from ..physics import actuator
+from .drag import REL_SE_MAX as DRAG_REL_SE_MAX, drag_20C, open_drag, per_run
 from .dynamics import frequency_response, step_models
-from .estimate import Estimate, source, weighted_mean
-from .friction import SLIP_MIN, W_RATIO, commanded_ratio, friction, measured_ratio, slip_samples
+from .estimate import BAR, Estimate, source, weighted_mean
+from .friction import W_RATIO, commanded_ratio, friction, measured_ratio, slip_samples
 from .inertia import J_P_HELD, REL_SE_MAX, InertiaFit, excited, inertias
 from .onset import Onset, onset
 from .recordings import Recording, same_recording
-from .result import Identification, identified_params
+from .result import _NEEDS, Identification, drag_resolved, identified_params
 from .ringing import resonance
 from .play import play_half_width
 from .static import GAIN_GROUPS, hysteresis, plateaus, static_gain
+from .supply import supply_pressure
 from .validation import validate
 
 
@@ -125,14 +131,16 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
         est["mu_slip_poly"] = friction(slips, mu_order)
     fits = [f for rec in clutch_runs if (f := inertias(rec, prior, ratio_of[id(rec)])) is not None]
     _inertias(fits, clutch_runs, est, notes)
-    drags = [(o, s) for o in onsets for s in slips if s.rec is o.rec and o.slip0 > SLIP_MIN]
+    # open-clutch oil drag: the axle torque before each run's first command change, back through the CVT, per
+    # rad/s of slip; referred to 20 C through the oil's viscosity
+    drags = [g for rec in clutch_runs if (g := open_drag(rec, ratio_of[id(rec)], prior.driveline.eta, p_contact))]
     if drags:
-        # open-clutch oil drag: T_r before the onset, back through the CVT, per rad/s of slip
-        est["oil_drag_Nms"] = Estimate(
-            [float(o.baseline * s.ratio / prior.driveline.eta / o.slip0) for o, s in drags],
-            [float(o.noise * s.ratio / prior.driveline.eta / o.slip0 / np.sqrt(500.0)) for o, s in drags],
-            "N m s (one value per run, in file order)", [source(o.rec, o.t_command - 0.5, o.t_command) for o, _ in drags],
-            {"oil_temp_C": [o.rec.oil_temp_C for o, _ in drags]})
+        est["oil_drag_Nms"] = per_run(drags)
+        est["drag_20C"] = drag_20C(drags)
+        if not drag_resolved(est):
+            g = est["drag_20C"]
+            notes["friction.drag_20C"] = (None, f"not resolved by the runs: {g.value:.3g} ± {g.se:.2g} N m s "
+                                                f"(standard error above {DRAG_REL_SE_MAX:.0%} of the value)")
     for key, (config, mode, order) in GAIN_GROUPS.items():
         group = [q for q in points if q.rec.config == config and q.rec.input_mode == mode]
         if (g := static_gain(group, order)) is not None:
@@ -141,6 +149,16 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
             est["valve_hysteresis_bar"] = h
             if (play := play_half_width(group, prior)) is not None:
                 est["magnet_play_A"] = play
+    supply, why = supply_pressure(points, prior)
+    if supply is not None:
+        est["supply_pressure_Pa"] = supply
+        if supply.value <= prior.hydraulics.p_relief:
+            notes["hydraulics.p_relief"] = (None, f"the prior's: it cracks above the highest pressure measured "
+                                                  f"({max(supply.extra['top_Pa']) / BAR:.2f} bar), which the supply "
+                                                  "bounds")
+    elif why:
+        for path in ("hydraulics.p_supply", "hydraulics.p_relief"):
+            notes[path] = (None, f"{why} (needs {_NEEDS['supply_pressure_Pa']})")
     if "valve_gain_poly" in est:
         v = est["valve_gain_poly"]
         est["valve_gain"] = Estimate({"slope_bar_per_duty": v.value[0], "offset_bar": v.value[1]},

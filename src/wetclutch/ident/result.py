@@ -10,6 +10,7 @@ import numpy as np
 from ..errors import WetclutchError
 from ..params import OIL_TEMP_RANGE_C, Params, describe, load
 from ..plant.driveline import axle_for
+from .drag import REL_SE_MAX
 from .dynamics import FrequencyResponse, StepModel
 from .estimate import Estimate, source
 from .friction import SlipSamples
@@ -38,6 +39,9 @@ PARAMS_FROM = {
     "hydraulics.x_contact": "contact_pressure_Pa",
     "valve.I_hyst": "magnet_play_A",
     "rig.oil_temp_C": "oil_temp_C",
+    "friction.drag_20C": "drag_20C",
+    "hydraulics.p_supply": "supply_pressure_Pa",
+    "hydraulics.p_relief": "supply_pressure_Pa",
 }
 #: the runs each entry of :data:`PARAMS_FROM` needs, for the reason a parameter stays at the prior
 _NEEDS = {
@@ -48,6 +52,11 @@ _NEEDS = {
     "contact_pressure_Pa": "a torque onset after a rising command step of a clutch run",
     "stroke_start_Pa": "a rising command step of a clutch run from an empty clutch, its stroke long enough to show",
     "magnet_play_A": "a staircase of the valve alone in PWM, up and down over the same levels",
+    "drag_20C": "a clutch run whose primary slips against the resting output with the plates apart for at least "
+                "0.2 s before its first command change (a step from an empty clutch)",
+    "supply_pressure_Pa": "a staircase up to the top of the input range whose highest two steps give the same "
+                          "pressure (the valve wide open): the valve alone in PWM up to duty 1, or the clutch in warm "
+                          "oil (85 C) up to 5 V; a single step to the top does not show it",
 }
 
 
@@ -114,7 +123,8 @@ class Identification:
         sources = self.sources()
         out["parameter_reasons"] = {path: why for path, (_, why) in sources.items()}
         why_not = {PARAMS_FROM[path]: why for path, (status, why) in sources.items() if status == "prior"}
-        for key in (*REPORTED, "ratio", "J_p", "J_1", "J_s"):  # always present: "not identified" is no typo
+        # always present: "not identified" is no typo
+        for key in (*REPORTED, "ratio", "J_p", "J_1", "J_s", "drag_20C", "supply_pressure_Pa"):
             why = why_not.get(key, "no suitable runs")
             out.setdefault(key, {"value": None, "se": None, "note": f"not identified: {why}", "sources": []})
         return out
@@ -133,6 +143,15 @@ def identified_params(prior: Params, est: dict[str, Estimate], fallback: dict[st
         raise WetclutchError(f"identified values make no valid parameter set: {err}") from None
 
 
+def drag_resolved(est: dict[str, Estimate]) -> bool:
+    """Whether the runs resolve ``friction.drag_20C``: positive, its standard error at most
+    :data:`wetclutch.ident.drag.REL_SE_MAX` of its value."""
+    if "drag_20C" not in est:
+        return False
+    value, se = est["drag_20C"].value, est["drag_20C"].se
+    return bool(value > 0.0 and se <= REL_SE_MAX * value)
+
+
 def identified_values(prior: Params, est: dict[str, Estimate],
                       fallback: dict[str, Any] | None = None) -> dict[str, Any]:
     """Dotted parameter path -> identified value, for the parameters the estimates determine.
@@ -141,7 +160,9 @@ def identified_values(prior: Params, est: dict[str, Estimate],
     ``driveline.J_p``, ``J_1``, ``J_s``, ``rig.oil_temp_C``, ``hydraulics.p_prestress`` (the pressure at which
     the stroke starts), ``hydraulics.x_contact`` (from the contact pressure above that prestress, or the
     prior's, with the prior's spring and piston area: the stroke that the pressure's span implies),
-    ``valve.I_hyst`` (the magnet's play, from the valve's up and down staircases), ``driveline.k_a`` and ``d_a``
+    ``valve.I_hyst`` (the magnet's play, from the valve's up and down staircases), ``friction.drag_20C`` (the open
+    plates' oil drag referred to 20 C, where the runs resolve it), ``hydraulics.p_supply`` (from a saturated top of
+    the static pressure; ``p_relief`` raised to it where the prior's cracks lower), ``driveline.k_a`` and ``d_a``
     (from resonance and damping with the ratio and the
     inertias, identified or else from ``fallback`` or the prior, through the relation
     in :mod:`wetclutch.params`).
@@ -170,6 +191,14 @@ def identified_values(prior: Params, est: dict[str, Estimate],
             sets["hydraulics.x_contact"] = (p_contact - p_start) * h.A_p / h.k_reset
     if "magnet_play_A" in est:
         sets["valve.I_hyst"] = float(est["magnet_play_A"].value)
+    if drag_resolved(est):
+        sets["friction.drag_20C"] = float(est["drag_20C"].value)
+    if "supply_pressure_Pa" in est:
+        # the valve's top: the supply pressure, and the relief valve cracks no lower than what was measured
+        p_supply = float(est["supply_pressure_Pa"].value)
+        sets["hydraulics.p_supply"] = p_supply
+        if p_supply > h.p_relief:
+            sets["hydraulics.p_relief"] = p_supply
     if "resonance_Hz" in est:
         zeta = est["damping_ratio"].value if "damping_ratio" in est else None
         plant = prior.model_copy(update={"driveline": prior.driveline.model_copy(update=inertias)})

@@ -112,8 +112,8 @@ def _report(result: Identification, plots: list[tuple[str, str]]) -> str:
                          f"{mp['dead_time_s']:.4f} | {mp['omega_n_rad_s']:.4g} | {mp['zeta']:.3g} |")
     lines += ["", "## Parameters: identified or from the prior", "",
               "The parameters that identification determines when the runs allow it; every other parameter "
-              "(valve, hydraulics but the prestress and the contact travel, thermal, ...) comes from the prior parameters, "
-              "which these experiments do not determine.", "",
+              "(valve, hydraulics but the prestress, the contact travel and the supply pressure, thermal, ...) comes "
+              "from the prior parameters, which these experiments do not determine.", "",
               "| parameter | source | reason |", "|---|---|---|"]
     sources = result.sources()
     lines += [f"| {p} | {status} | {why} |" for p, (status, why) in sources.items()]
