@@ -101,10 +101,10 @@ _PATCHES = (
       "            tp = tick(ws, 9, tp)\n")),
     ("sim/integrator.py", "    # the last grid point, when it falls on t_stop",
      "    tp = tick(ws, 11, tp)\n    # the last grid point, when it falls on t_stop"),
-    ("sim/integrator.py", "            gm = _event_value(e, tm, t, h, y_old, ws, net, ext)\n",
-     (f"            count(ws, {EVALUATIONS})\n            if _sliding(e, ws, net) < 0:\n"
-      f"                count(ws, {FULL_EVALUATIONS})\n"
-      "            gm = _event_value(e, tm, t, h, y_old, ws, net, ext)\n")),
+    ("sim/integrator.py", "        gm = _event_value(e, tm, t, h, y_old, ws, net, ext)\n",
+     (f"        count(ws, {EVALUATIONS})\n        if _sliding(e, ws, net) < 0:\n"
+      f"            count(ws, {FULL_EVALUATIONS})\n"
+      "        gm = _event_value(e, tm, t, h, y_old, ws, net, ext)\n")),
     ("sim/integrator.py",
      "    # golden-section search for the least slip on the dense output (its slip is smooth within the step)\n",
      f"    count(ws, {DIP_SEARCHES})\n"),

@@ -8,7 +8,7 @@ of the right-hand side that its restarts, located events and output rows call
 second only when its type inference reaches a call to it, after it has spent some ten seconds
 inlining its stages. So when :func:`begin` finds no cached ``rhs_call``, it starts a second
 Python process that compiles ``rhs_call`` into the cache (``python -m wetclutch.sim.coldstart``),
-then the integrator's event evaluation, PWM edge and mode log and what the layers above
+then the integrator's event location, PWM edge and mode log and what the layers above
 :func:`register` (the closed loop's controller), and holds this process's own compilation of
 ``rhs_call`` until the second process reports it done; then it loads the cached one. The results
 are those of a serial compile (each function compiled once).
@@ -32,7 +32,7 @@ from typing import Any
 
 import numba
 
-from .integrator import _event_value, _log_modes, _pwm_edge
+from .integrator import _log_modes, _pwm_edge, _root
 from .rhs import rhs_call
 
 #: seconds to wait for the second process's ``rhs_call`` (it takes some 20 s on 2 cores)
@@ -50,7 +50,7 @@ def job(fn, *args) -> tuple[str, str, tuple]:
 def _core_jobs(net, ext, ws) -> list[tuple[str, str, tuple]]:
     """``rhs_call`` first, then the integrator's other helpers that call it, on these records."""
     return [job(rhs_call, 0.0, ws.x, net, ext, ws, ws.dx, ws.aux, False, True),
-            job(_event_value, 0, 0.0, 0.0, 1.0, ws.y_old, ws, net, ext),
+            job(_root, 0, 1.0, 0.0, -1.0, 2.0, 0.0, 1.0, ws.y_old, ws, net, ext),
             job(_pwm_edge, 0.0, ws, net, ext),
             job(_log_modes, 0.0, ws.clm_before, ws)]
 

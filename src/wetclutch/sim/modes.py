@@ -341,7 +341,7 @@ def input_modes(t, net, ext, ws):
      ws.fstate[FS_PLAY_G]) = act_.play_start(ws.x, net.act, u, ext, ws.fstate[FS_AMP], ws.fstate[FS_PLAY_DIR])
 
 
-@jit
+@jit_inline
 def settle(t, net, ext, ws):
     """Decide consistent modes at time ``t`` for the workspace's state; project newly locked speeds. The valve
     amplifier's mode and the direction of its coil current follow from the state and the input alone.

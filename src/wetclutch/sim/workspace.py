@@ -62,7 +62,8 @@ IS_SETTLE = 0  # what must be decided again before the next step: nothing (0), S
 SETTLE_ALL = 1
 #: the valve amplifier's mode and the coil current's direction only: a jump of the valve's input alone moves no force
 #: at once (the coil's inductance keeps its current, hence the magnet's force and all that follows, continuous), so
-#: no clutch, brake, gear or piston can change its mode there
+#: no clutch, brake, gear or piston can change its mode there; the workspace must be as the last ``advance`` left it
+#: (its first stage is reused but for the coil current's rate)
 SETTLE_INPUT = 2
 IS_N_OUT = 1  # output rows written
 IS_STEPS = 2  # accepted steps
