@@ -1,7 +1,8 @@
 """The whole chain on clutches unlike the built-in rig: rig runs -> identify -> design -> verify.
 
 For each clutch below the virtual rig runs the experiments a user would run on their own clutch
-(a clutch step at 41 C and at 85 C, a valve staircase in PWM), ``identify`` turns the recordings into
+(a clutch step at 41 C and at 85 C, valve staircases in PWM: fine steps over the magnet's play, and one up to
+the valve wide open for the supply pressure), ``identify`` turns the recordings into
 a parameter set, the launch controller is designed on it, and the design is verified over the
 shipped ranges twice: on the identified plant (what the user's own verification shows) and on the
 clutch itself (what the vehicle sees, including what the rig runs could not identify, such as the
@@ -101,7 +102,8 @@ def drawn(n: int, seed: int) -> dict[str, dict]:
 #: the rig runs of the chain: (name, experiment, settings)
 RUNS = (("step41", "step", dict(level=1.5, oil_temp_C=41.0, seed=1)),
         ("step85", "step", dict(level=2.5, oil_temp_C=85.0, seed=2)),
-        ("stair", "staircase", dict(config="valve-only", input_mode="pwm", level=0.15, from_=0.0, seed=3)))
+        ("stair", "staircase", dict(config="valve-only", input_mode="pwm", level=0.15, from_=0.0, seed=3)),
+        ("top", "staircase", dict(config="valve-only", input_mode="pwm", level=1.0, from_=0.0, seed=4)))
 
 
 def chain(overrides: dict, root: Path, samples: int, seed: int, sequence: int) -> tuple[dict, str]:
