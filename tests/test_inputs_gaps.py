@@ -52,7 +52,8 @@ def _refused(capsys, args: list[str], message: str, out: Path) -> None:
     ("time,t_ref\n0,10,1\n0.5,20,5\n1,30,3\n", 2),  # every row: the request was read shifted, without a word
     ("time,t_ref\n0,10\n0.5,20,5\n1,30\n", 3),      # a later row: pandas could not tokenize it
     ("time,t_ref\n\n0,10\n\n0.5,20,\n1,30\n", 5),   # a trailing comma; the line counts the blank lines too
-], ids=["first-row", "every-row", "later-row", "trailing-comma"])
+    ("time,t_ref\n0,10,5\n1,20,5\n2,30,5\n", 2),    # whole seconds: pandas's index of them looked like no index
+], ids=["first-row", "every-row", "later-row", "trailing-comma", "integer-times"])
 def test_a_profile_row_longer_than_its_header_is_named_by_its_line(tmp_path, capsys, no_work, text, line):
     f = tmp_path / "profile.csv"
     f.write_text(text)

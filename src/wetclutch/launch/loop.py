@@ -321,18 +321,16 @@ def reference(cond: Conditions, t: np.ndarray) -> np.ndarray:
         r = cond.t_ref * np.clip(tau / RAMP_TIME, 0.0, 1.0)
     else:
         where = f"{named('profile', '--profile')} {cond.profile}"
+        # a first data row longer than the header makes pandas take the leading column for an index and shift the rest
+        # under the wrong names, silently where that column counts 0, 1, 2 (a later long row fails to tokenize)
+        if (malformed := _longer_than_header(cond.profile)) is not None:
+            raise WetclutchError(f"{where}: {malformed}")
         try:
             f = pd.read_csv(cond.profile)
             tt = np.asarray(f["time"], dtype=float)
             rr = np.asarray(f["t_ref"], dtype=float)
         except (OSError, KeyError, ValueError, pd.errors.ParserError) as e:
-            if (malformed := _longer_than_header(cond.profile)) is not None:
-                raise WetclutchError(f"{where}: {malformed}") from None
             raise WetclutchError(f"{where}: needs numeric columns 'time' and 't_ref' ({type(e).__name__})") from None
-        # a first data row longer than the header makes pandas take the leading columns for an index and shift the
-        # rest under the wrong names (a later one fails to tokenize, above)
-        if not isinstance(f.index, pd.RangeIndex) and (malformed := _longer_than_header(cond.profile)) is not None:
-            raise WetclutchError(f"{where}: {malformed}")
         if tt.size < 2:
             raise WetclutchError(f"{where}: needs at least two rows (time, t_ref), has {tt.size}")
         for name, v in (("time", tt), ("t_ref", rr)):
