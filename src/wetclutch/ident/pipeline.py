@@ -53,7 +53,7 @@ from .friction import W_RATIO, commanded_ratio, friction, measured_ratio, slip_s
 from .inertia import J_P_HELD, REL_SE_MAX, InertiaFit, excited, inertias
 from .onset import Onset, onset
 from .recordings import Recording, same_recording
-from .result import _NEEDS, Identification, drag_resolved, identified_params
+from .result import NEEDS, Identification, drag_resolved, identified_params
 from .ringing import resonance
 from .play import play_half_width
 from .static import GAIN_GROUPS, hysteresis, plateaus, static_gain
@@ -158,7 +158,7 @@ def identify(recordings: Sequence[Recording], prior: Params | None = None, mu_or
                                                   "bounds")
     elif why:
         for path in ("hydraulics.p_supply", "hydraulics.p_relief"):
-            notes[path] = (None, f"{why} (needs {_NEEDS['supply_pressure_Pa']})")
+            notes[path] = (None, f"{why} (needs {NEEDS['supply_pressure_Pa']})")
     if "valve_gain_poly" in est:
         v = est["valve_gain_poly"]
         est["valve_gain"] = Estimate({"slope_bar_per_duty": v.value[0], "offset_bar": v.value[1]},

@@ -44,7 +44,7 @@ PARAMS_FROM = {
     "hydraulics.p_relief": "supply_pressure_Pa",
 }
 #: the runs each entry of :data:`PARAMS_FROM` needs, for the reason a parameter stays at the prior
-_NEEDS = {
+NEEDS = {
     "mu_slip_poly": "a slip phase of a clutch run with enough calm samples",
     "ratio": "a clutch run",
     "resonance_Hz": "a ring-out of at least 0.8 s after synchronisation",
@@ -99,7 +99,7 @@ class Identification:
             if path in found:
                 out[path] = ("identified", f"from {entry}")
             else:
-                out[path] = ("prior", self.notes.get(path) or f"no suitable runs (needs {_NEEDS[entry]})")
+                out[path] = ("prior", self.notes.get(path) or f"no suitable runs (needs {NEEDS[entry]})")
         return out
 
     def as_json(self) -> dict[str, Any]:
