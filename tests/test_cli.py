@@ -256,7 +256,9 @@ def test_out_that_cannot_be_replaced_is_refused_before_any_work(tmp_path, args, 
     assert sorted(p.name for p in tmp_path.rglob("*")) == ["keep", "work"]
 
 
-def test_a_failed_swap_puts_the_previous_output_back_and_leaves_nothing_else(tmp_path, monkeypatch):
+@pytest.mark.parametrize("fault", ["busy", "interrupt"])
+def test_a_failed_swap_puts_the_previous_output_back_and_leaves_nothing_else(tmp_path, monkeypatch, fault):
+    # the new output's move into place fails (e.g. a busy mount point), or Ctrl-C comes just then
     from wetclutch import output
     from wetclutch.errors import WetclutchError
 
@@ -266,16 +268,18 @@ def test_a_failed_swap_puts_the_previous_output_back_and_leaves_nothing_else(tmp
     real = output.os.rename
 
     def rename(src, dst):
-        if str(src).endswith(".tmp"):  # the new output's move into place fails (e.g. a busy mount point)
-            raise OSError(16, "Device or resource busy")
+        if str(src).endswith(".tmp"):
+            raise OSError(16, "Device or resource busy") if fault == "busy" else KeyboardInterrupt
         real(src, dst)
 
     monkeypatch.setattr(output.os, "rename", rename)
-    with pytest.raises(WetclutchError, match="cannot write output .*busy"):
+    raised = pytest.raises(WetclutchError, match="cannot write output .*busy") if fault == "busy" else \
+        pytest.raises(KeyboardInterrupt)
+    with raised:
         with output.atomic_dir(target) as d:
             (d / "new.csv").write_text("time\n")
     assert [p.name for p in tmp_path.iterdir()] == ["out"]
-    assert [p.name for p in target.iterdir()] == ["marker"]
+    assert [p.name for p in target.iterdir()] == ["marker"] and (target / "marker").read_text() == "old"
 
 
 def test_options_that_would_be_ignored_are_refused(tmp_path, cli_refuses):

@@ -270,25 +270,6 @@ def test_an_output_directory_is_made_with_the_usual_permissions(tmp_path):
     assert stat.S_IMODE((tmp_path / "o").stat().st_mode) == 0o755
 
 
-def test_an_interrupt_between_the_renames_puts_the_previous_output_back(tmp_path, monkeypatch):
-    target = tmp_path / "out"
-    target.mkdir()
-    (target / "marker").write_text("old")
-    real = output.os.rename
-
-    def rename(src, dst):
-        if str(src).endswith(".tmp"):  # Ctrl-C just as the new output moves into place
-            raise KeyboardInterrupt
-        real(src, dst)
-
-    monkeypatch.setattr(output.os, "rename", rename)
-    with pytest.raises(KeyboardInterrupt):
-        with output.atomic_dir(target) as d:
-            (d / "new.csv").write_text("time\n")
-    assert [p.name for p in tmp_path.iterdir()] == ["out"]
-    assert (target / "marker").read_text() == "old"
-
-
 _INTERRUPTED = textwrap.dedent("""
     import os, signal, sys
     import wetclutch.report.design as report

@@ -161,12 +161,18 @@ def test_the_launch_shown_is_captioned_by_its_own_conditions():
 # ---------------------------------------------------------------- the launch plot on its own
 
 
-def test_the_launch_plot_keeps_one_colour_per_launch_and_names_its_conditions(tmp_path, monkeypatch):
+def _step_launch() -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Measured and true signals of a made-up launch: a 100 N m step at 1 s, answered at once."""
     t = np.linspace(0.0, 2.0, 201)
     step = np.where(t > 1.0, 100.0, 0.0)
     sig = pd.DataFrame({"time": t, "t_ref": step, "T_r": step, "p_clutch": 1e5 + 1e3 * step, "u": 1.0 + 0.01 * step,
                         "omega_p": 150.0 - 10 * t, "omega_1": 10 * t, "omega_s": 5 * t})
     truth = pd.DataFrame({"time": t, "T_r": step})
+    return sig, truth
+
+
+def test_the_launch_plot_keeps_one_colour_per_launch_and_names_its_conditions(tmp_path, monkeypatch):
+    sig, truth = _step_launch()
     figs = []
     monkeypatch.setattr(plots.plt, "close", figs.append)
     plots.plot_launch(sig, truth, _summary(41.0, 100.0, "launch"), tmp_path / "l.png", extra=sig, extra_label="baseline")
@@ -188,11 +194,7 @@ def test_the_launch_plot_keeps_one_colour_per_launch_and_names_its_conditions(tm
 
 
 def test_the_launch_plot_gives_the_compared_launchs_verdicts_too(tmp_path, monkeypatch):
-    t = np.linspace(0.0, 2.0, 201)
-    step = np.where(t > 1.0, 100.0, 0.0)
-    sig = pd.DataFrame({"time": t, "t_ref": step, "T_r": step, "p_clutch": 1e5 + 1e3 * step, "u": 1.0 + 0.01 * step,
-                        "omega_p": 150.0 - 10 * t, "omega_1": 10 * t, "omega_s": 5 * t})
-    truth = pd.DataFrame({"time": t, "T_r": step})
+    sig, truth = _step_launch()
     base = _summary(41.0, 100.0, "baseline")
     base["requirements"] = {k: k != "response_time" for k in metrics.REQUIREMENTS}
     figs = []
