@@ -195,6 +195,20 @@ def test_a_kiss_point_loads_from_the_floor_up(kiss):
         assert adaptation.loads(_state(kiss)).kiss_Pa == {adaptation.band(70.0): kiss}
 
 
+@settings(max_examples=50, deadline=None)
+@given(found=st.floats(0.0, 5e6), before=st.none() | st.floats(0.0, 5e6))
+def test_a_learnt_state_loads_again_whatever_kiss_point_a_launch_found(found, before):
+    # a clutch whose plates touch at once (no prestress, a short stroke) finds its kiss point within the
+    # pressure sensor's noise of zero
+    state = adaptation.Adaptation()
+    if before is not None:
+        state = state.learn(70.0, before)
+    state = state.learn(70.0, found)
+    back = adaptation.loads(state.to_toml())
+    assert back.kiss_Pa == state.kiss_Pa
+    assert back.kiss_Pa[adaptation.band(70.0)] >= adaptation.KISS_MIN_PA
+
+
 def test_the_floor_lies_below_every_kiss_point_the_shipped_ranges_reach():
     # the lowest on the built-in rig: the prestress 0.3 bar lower and the stroke 30 % shorter
     h = Params().hydraulics

@@ -111,7 +111,9 @@ class Adaptation:
             return old if new is None else old | {b: _blend(old.get(b), new)}
 
         margin = self.margin | {b: min(self.hold_margin(temp_C) + MARGIN_STEP, MARGIN_MAX)} if crept else self.margin
-        return Adaptation(learnt(self.kiss_Pa, found_Pa), self.launches | {b: self.launches.get(b, 0) + 1},
+        # a kiss point found below the floor (within the sensor's noise of zero) is kept at it: a state it
+        # writes must load again
+        return Adaptation(learnt(self.kiss_Pa, max(found_Pa, KISS_MIN_PA)), self.launches | {b: self.launches.get(b, 0) + 1},
                           learnt(self.friction, friction), learnt(self.slope, slope),
                           self.inertia if inertia is None else _blend(self.inertia, inertia), margin)
 
