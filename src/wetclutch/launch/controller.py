@@ -79,7 +79,9 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       static pressure-vs-voltage map at the measured oil temperature
       (gain scheduling on temperature: the map is tabulated over 20 to 100 C).
     * **Feedback on pressure and on torque.** A PI loop on the measured pressure
-      removes static-map errors. Friction differs from unit to unit by some
+      removes static-map errors; once torque is requested it feeds back the
+      pressure's rate as well, which damps the lag of the valve's stem, with a gain
+      scheduled on the oil temperature as that damping is (:func:`rate_gain`). Friction differs from unit to unit by some
       20 %; an integrator alone would take too long to make that up within
       0.2 s, so the controller also estimates a friction factor ``theta`` (the
       measured torque over the nominal model's torque at the measured pressure,
@@ -221,10 +223,10 @@ LAUNCH, BASELINE = 0, 1
  HOLD_RATE, TAU_THETA, THETA0, DITHER_AMP, DITHER_HALF, KP_HOLD, DIP, DIP_N, HOLD_LEAD, FILL_EXIT_COLD, FF_T0, FF_DT,
  FF_NT, FF_P0, FF_DP, FF_NP, KI_HOLD, DITHER_AMP_T, DITHER_HALF_T, FF_SHIFT_T, REQ_LEAD, KD_P, CREEP_LIMIT,
  VALVE_PLAY, TRAPPED_DIP, DITHER_HALF_HIGH, DITHER_HIGH_ABOVE, STROKE_SPAN, J_1, K_A, D_A, REF_RISE,
- KI_RISE) = range(4, 53)
+ KI_RISE, KD_P_COLD) = range(4, 54)
 # baseline: its PI gains (V/N m, V/(N m s)) and the fill time (s) at each feedforward temperature
-KP_B, KI_B = 53, 54
-FILL_T = 55
+KP_B, KI_B = 54, 55
+FILL_T = 56
 N_FILL_T = 5
 #: the request's S-curve (:func:`ref_weights`): its length in samples, then its weights (N_REF_W slots, the unused
 #: ones zero: the longest ``ref_rise`` at the shortest sample time, 0.5 s at 0.1 ms)
@@ -431,6 +433,10 @@ TRAPPED = 0.05e5
 #: and a request judged to wait for the fill there would lift the set point ``req_lead`` above plates that already
 #: touch: the pressure slams up, the torque overshoots and the plates bounce open
 FILLED_NEAR = 0.05e5
+#: oil temperatures (C) between which the pressure loop's rate gain goes from ``kd_p`` (warm) to ``kd_p_cold`` times
+#: it (cold; :func:`rate_gain`)
+RATE_GAIN_WARM_C = 30.0
+RATE_GAIN_COLD_C = 10.0
 #: half-width (Pa) of the band about ``dither_high_above`` within which the torque dither keeps its frequency
 DITHER_BAND = 0.1e5
 #: the shaped request counts as still rising while it is short of the request by more than this share of it
@@ -809,6 +815,16 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
 
 
 @_inline
+def rate_gain(ctrl, temp):
+    """The pressure loop's gain on the pressure's rate (V s/Pa) at oil temperature ``temp`` (C): ``kd_p`` from
+    :data:`RATE_GAIN_WARM_C` up, ``kd_p_cold`` times it at :data:`RATE_GAIN_COLD_C` and below, linear between.
+    The stem's viscous damping grows with the oil's viscosity as the oil cools, and so does the lag that the rate
+    feedback damps; in warm oil a larger gain rings the loop with a lightly damped stem."""
+    cold = min(max((RATE_GAIN_WARM_C - temp) / (RATE_GAIN_WARM_C - RATE_GAIN_COLD_C), 0.0), 1.0)
+    return ctrl[KD_P] * (1.0 + (ctrl[KD_P_COLD] - 1.0) * cold)
+
+
+@_inline
 def _pressure_loop(ctrl, cs, p_set, p, temp, hold, dt):
     """Feedforward through the inverse static map plus PI on pressure, with conditional-integration anti-windup."""
     e_p = p_set - p
@@ -827,7 +843,7 @@ def _pressure_loop(ctrl, cs, p_set, p, temp, hold, dt):
         shift = ctrl[VALVE_PLAY] + (ctrl[TRAPPED_DIP] if cs[CS_TF] > ctrl[CREEP_LIMIT] else 0.0)
     # the valve regulates the pressure through a slow (damped) stem and the clutch volume, an integrator: the
     # lag of a stiffly damped stem leaves that loop underdamped, and feedback of the pressure's rate damps it
-    damp = 0.0 if hold else ctrl[KD_P] * cs[CS_DPF]
+    damp = 0.0 if hold else rate_gain(ctrl, temp) * cs[CS_DPF]
     u = _table(ctrl, temp, p_set) - shift + cs[CS_ZP] + kp * e_p - damp
     if trapped or ((hold or cs[CS_ANSWERED] == 0.0) and cs[CS_PF] < cs[CS_KISS]):
         # no integration: a trapped pressure's error is the play's, not the map's; and while the piston
@@ -1201,7 +1217,8 @@ def pack(kind: str, s: dict[str, float], mu: np.ndarray, temps: np.ndarray, pres
              DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque", FF_SHIFT_T: "ff_shift",
              REQ_LEAD: "req_lead", KD_P: "kd_p", CREEP_LIMIT: "creep_limit", VALVE_PLAY: "valve_play",
              TRAPPED_DIP: "trapped_dip", DITHER_HALF_HIGH: "dither_half_high", DITHER_HIGH_ABOVE: "dither_high_above",
-             STROKE_SPAN: "stroke_span", J_1: "j_1", K_A: "k_a", D_A: "d_a", REF_RISE: "ref_rise", KI_RISE: "ki_rise"}
+             STROKE_SPAN: "stroke_span", J_1: "j_1", K_A: "k_a", D_A: "d_a", REF_RISE: "ref_rise", KI_RISE: "ki_rise",
+             KD_P_COLD: "kd_p_cold"}
     baseline = {P_KISS: "p_kiss", HOLD_OFFSET: "hold_offset", DIP: "dip", DIP_N: "dip_n", KP_B: "kp", KI_B: "ki",
                 DITHER_AMP_T: "dither_amp_torque", DITHER_HALF_T: "dither_half_torque"}
     for slot, name in (launch if kind == "launch" else baseline).items():
