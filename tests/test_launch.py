@@ -486,7 +486,9 @@ def test_a_torque_ahead_of_the_rising_request_does_not_hold_the_response_back():
     # t95 is 0.176-0.226 s, 0.202 s on average (measured); with the integrator winding down it was 0.249-0.295 s,
     # 0.281 s on average. One seed alone sits near the 0.2 s limit either way, so the mean over the five is judged.
     # An earlier launch has measured the output (as light as the design's), so that the request takes the two stages:
-    # through a first launch's S-curve the jolt stays below 95 % of the request (t95 0.16-0.17 s)
+    # through a first launch's S-curve the jolt stays below 95 % of the request (t95 0.16-0.17 s). The jolt comes
+    # with the warm oil's rate gain in the pressure loop (kd_p_cold = 1); the cold oil's gain damps it (t95 0.11-0.16
+    # s, settled 0.164-0.196 s, 0.181 s on average, measured)
     plant = params_load(overrides={
         "hydraulics.p_prestress": 78700.0, "hydraulics.x_contact": 1.647e-3, "friction.mu_scale": 1.03,
         "friction.mu_slope": 0.808, "hydraulics.p_supply": 7.0e5, "hydraulics.leak_85C": 3.5e-12,
@@ -494,14 +496,17 @@ def test_a_torque_ahead_of_the_rising_request_does_not_hold_the_response_back():
         "hydraulics.air_fraction": 0.0043, "driveline.ratio": 0.60, "driveline.eta": 0.914, "driveline.k_a": 493.0,
         "engage.T_load": 28.4})
     d = designs.design(Params())
-    settled = []
-    for seed in range(1, 6):
-        cond = launch.Conditions(t_ref=157.6, oil_temp_C=11.6, seed=seed, noise_scale=1.155)
-        s = launch.simulate(plant, d, cond, nominal=metrics.Response.empty(),
-                            adaptation=Adaptation(inertia=Params().driveline.J_1)).summary
-        assert s["t95_s"] < 0.1
-        settled.append(s["t95_settled_s"])
-    assert sum(settled) / len(settled) < 1.1 * metrics.REQ_T95_S, settled
+    settled = {}
+    for k in (1.0, d.settings["kd_p_cold"]):
+        settled[k] = []
+        for seed in range(1, 6):
+            cond = launch.Conditions(t_ref=157.6, oil_temp_C=11.6, seed=seed, noise_scale=1.155)
+            s = launch.simulate(plant, designs.with_settings(d, kd_p_cold=k), cond, nominal=metrics.Response.empty(),
+                                adaptation=Adaptation(inertia=Params().driveline.J_1)).summary
+            assert (s["t95_s"] < 0.1) == (k == 1.0), (k, s["t95_s"])
+            settled[k].append(s["t95_settled_s"])
+    assert sum(settled[1.0]) / 5 < 1.1 * metrics.REQ_T95_S, settled
+    assert sum(settled[d.settings["kd_p_cold"]]) / 5 < metrics.REQ_T95_S, settled
 
 
 def test_a_launch_and_a_design_show_their_figures_not_their_arrays():
