@@ -113,7 +113,8 @@ class Adaptation:
         margin = self.margin | {b: min(self.hold_margin(temp_C) + MARGIN_STEP, MARGIN_MAX)} if crept else self.margin
         # a kiss point found below the floor (within the sensor's noise of zero) is kept at it: a state it
         # writes must load again
-        return Adaptation(learnt(self.kiss_Pa, max(found_Pa, KISS_MIN_PA)), self.launches | {b: self.launches.get(b, 0) + 1},
+        return Adaptation(learnt(self.kiss_Pa, max(found_Pa, KISS_MIN_PA)),
+                          self.launches | {b: self.launches.get(b, 0) + 1},
                           learnt(self.friction, friction), learnt(self.slope, slope),
                           self.inertia if inertia is None else _blend(self.inertia, inertia), margin)
 

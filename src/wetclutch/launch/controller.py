@@ -81,9 +81,9 @@ settings and their design live in :mod:`wetclutch.launch.design`.
     * **Feedback on pressure and on torque.** A PI loop on the measured pressure
       removes static-map errors; once torque is requested it feeds back the
       pressure's rate as well, which damps the lag of the valve's stem, with a gain
-      scheduled on the oil temperature as that damping is (:func:`rate_gain`). Friction differs from unit to unit by some
-      20 %; an integrator alone would take too long to make that up within
-      0.2 s, so the controller also estimates a friction factor ``theta`` (the
+      scheduled on the oil temperature as that damping is (:func:`rate_gain`).
+      Friction differs from unit to unit by some 20 %; an integrator alone
+      would take too long to make that up within 0.2 s, so the controller also estimates a friction factor ``theta`` (the
       measured torque over the nominal model's torque at the measured pressure,
       low-pass filtered) and scales its friction law by it: an adaptive
       feedforward. The torque in that ratio is the clutch's, ``T_r i / eta + J_1 w_1'``:

@@ -60,7 +60,8 @@ _P = (0.0, 5e6)
 #: ``dither_amp_torque`` set per plant by :func:`rate_gain_share`, :func:`high_dither_above` and :func:`dither_share`)
 LAUNCH_DEFAULTS = {
     "hold_offset": 0.0, "fill_exit": 0.1e5, "fill_exit_cold": 0.05e5, "hold_rate": 1.0e5, "hold_lead": 0.01e5,
-    "req_lead": 0.3e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kd_p": 0.5e-8, "kd_p_cold": 3.0, "kp_hold": 0.05e-5, "ki_hold": 2.0e-5, "kp_t": 0.0,
+    "req_lead": 0.3e5, "kp_p": 2.96e-7, "ki_p": 4.6e-5, "kd_p": 0.5e-8, "kd_p_cold": 3.0, "kp_hold": 0.05e-5,
+    "ki_hold": 2.0e-5, "kp_t": 0.0,
     "ki_t": 3.9, "ki_rise": 6.0, "tau_ref": 0.03, "ref_rise": 0.18, "tau_theta": 0.05, "theta0": 1.0,
     "dither_amp": 0.05, "dither_hz": 125.0,
     "dither_amp_torque": 0.35, "dither_hz_torque": 166.7, "dither_hz_high": 250.0, "dither_high_above": 1.0e5,
@@ -78,9 +79,9 @@ LAUNCH_DEFAULTS = {
 #: shipped ranges, two seeds, three launches) and 1.5 and 3 times over 16 clutches unlike it (300 plants each);
 #: ``kd_p`` half of what a sweep judging the torque's 10 ms mean had chosen, a mean that hid the pressure loop
 #: ringing at 60-70 Hz in hot oil (1,000 plants of the shipped ranges, three launches, 0.5 and 1 times the swept
-#: value on three seeds, 0 and 0.25 times on one); ``kd_p_cold`` from 1, 2, 3 and 5 over the default rig with the oil at
-#: 10-25 C (1,000 plants of the shipped ranges otherwise, three launches) and 1, 2 and 3 over 16 clutches unlike it
-#: (300 plants each, first launches); the rest were set by hand on the default rig
+#: value on three seeds, 0 and 0.25 times on one); ``kd_p_cold`` from 1, 2, 3 and 5 over the default rig with the
+#: oil at 10-25 C (1,000 plants of the shipped ranges otherwise, three launches) and 1, 2 and 3 over 16 clutches unlike
+#: it (300 plants each, first launches); the rest were set by hand on the default rig
 TUNED = ("kp_p", "ki_p", "ki_t")
 #: oil temperature (C) at which :func:`rate_gain_share` compares the oil's compliances (the share hardly depends on it)
 RATE_GAIN_TEMP_C = 60.0
@@ -118,8 +119,8 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "kp_p": Setting("V/Pa", 0.0, 1.0, "pressure loop, proportional gain, once torque is requested"),
         "ki_p": Setting("V/(Pa s)", 0.0, 1.0, "pressure loop, integral gain, once torque is requested"),
         "kd_p": Setting("V s/Pa", 0.0, 1.0, "pressure loop, gain on the pressure's rate (damping), once torque is requested"),
-        "kd_p_cold": Setting("-", 0.0, 100.0, "factor on kd_p in oil at 10 C and below (1 from 30 C up, linear between): "
-                                              "the valve stem's damping grows as the oil cools"),
+        "kd_p_cold": Setting("-", 0.0, 100.0, "factor on kd_p in oil at 10 C and below (1 from 30 C up, linear "
+                                              "between): the valve stem's damping grows as the oil cools"),
         "kp_hold": Setting("V/Pa", 0.0, 1.0, "pressure loop, proportional gain, in the hold"),
         "ki_hold": Setting("V/(Pa s)", 0.0, 1.0, "pressure loop, integral gain, in the hold"),
         "kp_t": Setting("-", 0.0, 100.0, "torque loop, proportional gain (per nominal pressure per N m)"),
