@@ -4,9 +4,8 @@ With the plates apart, the only torque that crosses the clutch is the oil's visc
 CVT (forward power flow, ratio ``i``, efficiency ``eta``) the axle carries ``eta / i`` of it. Before a run's first
 command change the valve holds the clutch empty and the primary slips against the resting output, so the mean axle
 torque over that stretch over the mean slip gives ``d`` at the run's oil temperature. The model's drag scales with
-the oil's dynamic viscosity (:func:`wetclutch.plant.clutch.build`: ``drag_20C mu(T) / mu(20 C)``,
-:func:`wetclutch.physics.oil.dynamic_viscosity`), so each run's value divided by that factor is the same
-``friction.drag_20C``, and runs at different temperatures combine.
+the oil's dynamic viscosity (:func:`wetclutch.physics.oil.drag_at`: ``drag_20C mu(T) / mu(20 C)``), so each run's
+value divided by that factor is the same ``friction.drag_20C``, and runs at different temperatures combine.
 """
 
 from __future__ import annotations
@@ -47,9 +46,9 @@ class OpenDrag:
 
 
 def viscosity_factor(temp_C: float) -> float:
-    """The model's drag at ``temp_C`` over its drag at 20 C: the ratio of the oil's dynamic viscosities."""
-    temp = float(np.clip(temp_C, *OIL_TEMP_RANGE_C))
-    return float(oil.dynamic_viscosity(temp) / oil.dynamic_viscosity(20.0))
+    """The model's drag at ``temp_C`` over its drag at 20 C (:func:`wetclutch.physics.oil.drag_at`), the temperature
+    held within the oil temperatures a run may give."""
+    return float(oil.drag_at(1.0, float(np.clip(temp_C, *OIL_TEMP_RANGE_C))))
 
 
 def open_drag(rec: Recording, ratio: float, eta: float, p_contact: float) -> OpenDrag | None:

@@ -156,6 +156,12 @@ def dynamic_viscosity(temp_C, p=0.0, *, model: OilModel = DEFAULT):
     return _out(_mu(_nu(t, *model.walther), rho, pp, model.alpha_barus), scalar)
 
 
+def drag_at(drag_20C: float, temp_C: float) -> float:
+    """The open plates' viscous drag coefficient (N m s) at ``temp_C`` (C) from its value at 20 C: the oil's shear
+    between the plates scales with its dynamic viscosity."""
+    return drag_20C * dynamic_viscosity(temp_C) / dynamic_viscosity(20.0)
+
+
 def bulk_modulus(temp_C, p=0.0, *, air_fraction: float | None = None, model: OilModel = DEFAULT):
     """Effective isentropic bulk modulus of oil with entrained air, Pa.
 

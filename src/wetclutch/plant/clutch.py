@@ -87,8 +87,7 @@ def build(params: Params, u: Signal | float, *, pwm: bool = False, config: str =
         ci = 0  # the driveline's clutch
         net.clutches[ci].mu_poly = tuple(f.curve())
         # cold oil drags the open plates: viscous torque proportional to viscosity
-        drag = f.drag_20C * oil.dynamic_viscosity(temp) / oil.dynamic_viscosity(20.0)
-        net.spring("oil_drag", 0, 1, 0.0, drag)
+        net.spring("oil_drag", 0, 1, 0.0, oil.drag_at(f.drag_20C, temp))
     else:
         net = Network()
         ci = -1
