@@ -81,7 +81,9 @@ settings and their design live in :mod:`wetclutch.launch.design`.
     * **Feedback on pressure and on torque.** A PI loop on the measured pressure
       removes static-map errors; once torque is requested it feeds back the
       pressure's rate as well, which damps the lag of the valve's stem, with a gain
-      scheduled on the oil temperature as that damping is (:func:`rate_gain`).
+      scheduled on the oil temperature as that damping is (:func:`rate_gain`); where
+      the stem is damped less than the schedule assumes and the loop runs into a limit
+      cycle (:data:`LC_RATE`), the rate feedback goes for the rest of the launch.
       Friction differs from unit to unit by some 20 %; an integrator alone
       would take too long to make that up within 0.2 s, so the controller also estimates a friction factor ``theta`` (the
       measured torque over the nominal model's torque at the measured pressure,
@@ -272,7 +274,13 @@ CS_ATTOP = CS_SLIPP + 1
 CS_SAT = CS_ATTOP + 1
 #: 1 where the clutch output's inertia in ``CS_J1`` was measured on earlier launches, 0 where it is the design's
 CS_J1_MEASURED = CS_SAT + 1
-N_CS = CS_J1_MEASURED + 1
+#: the pressure loop's limit-cycle watch (:func:`_watch_cycle`): the sign of the pressure's rate at its last swing
+#: beyond LC_RATE, the swings in a row, the sample of the last one, and how many cycles have been seen
+CS_LC_SIGN = CS_J1_MEASURED + 1
+CS_LC_N = CS_LC_SIGN + 1
+CS_LC_AT = CS_LC_N + 1
+CS_LC_SEEN = CS_LC_AT + 1
+N_CS = CS_LC_SEEN + 1
 #: the input counts as at the top of its range once within the torque dither of it for this many samples in a row
 TOP_N = 20
 #: the capacity is predicted from this long (s) after the request, when the slip's rate is measured, to the end of
@@ -311,6 +319,16 @@ SHORT_STROKE = 1.5
 #: time constant of the filtered derivative of the measured pressure (s): it passes the valve's own pressure
 #: oscillation (20 to 40 Hz) and smooths the sensor's noise
 TAU_DP = 0.002
+#: a limit cycle of the pressure loop: the filtered pressure's rate swings beyond +-LC_RATE (Pa/s) LC_SWINGS times
+#: in a row, each swing within LC_GAP (s) of the last. The rate gain that damps a stiffly damped stem's lag drives a
+#: lightly damped one (a stem with half the default's damping in cold oil) into an 80-90 Hz cycle of several bar,
+#: whose rate swings by some 100 MPa/s; a launch's rise (up to some 20 MPa/s) and the dither's ripple stay below
+#: LC_RATE. Once a cycle is seen the rate gain is off for the rest of the launch: a cycle of that size saturates the
+#: valve's input and goes on at a quarter of the gain that started it (on two such clutches, a gain halved at each
+#: cycle seen took four or five halvings and left the response late).
+LC_RATE = 3.0e7
+LC_GAP = 0.012
+LC_SWINGS = 8
 #: the friction factor the controller takes, measured or learnt: a clutch outside this is broken, not drifted
 THETA_MIN, THETA_MAX = 0.5, 2.0
 #: friction-factor estimates (samples) behind a value worth learning for the next launch, and the count at which
@@ -843,7 +861,7 @@ def _pressure_loop(ctrl, cs, p_set, p, temp, hold, dt):
         shift = ctrl[VALVE_PLAY] + (ctrl[TRAPPED_DIP] if cs[CS_TF] > ctrl[CREEP_LIMIT] else 0.0)
     # the valve regulates the pressure through a slow (damped) stem and the clutch volume, an integrator: the
     # lag of a stiffly damped stem leaves that loop underdamped, and feedback of the pressure's rate damps it
-    damp = 0.0 if hold else rate_gain(ctrl, temp) * cs[CS_DPF]
+    damp = 0.0 if hold or cs[CS_LC_SEEN] > 0.0 else rate_gain(ctrl, temp) * cs[CS_DPF]
     u = _table(ctrl, temp, p_set) - shift + cs[CS_ZP] + kp * e_p - damp
     if trapped or ((hold or cs[CS_ANSWERED] == 0.0) and cs[CS_PF] < cs[CS_KISS]):
         # no integration: a trapped pressure's error is the play's, not the map's; and while the piston
@@ -877,6 +895,20 @@ def _dither(ctrl, cs, u, hold, high=0.0):
         amp, half = ctrl[DITHER_AMP_T], max(int(ctrl[DITHER_HALF_T] if high == 0.0 else ctrl[DITHER_HALF_HIGH]), 1)
     d = amp if (k // half) % 2 == 0 else -amp
     return min(max(u + d, ctrl[U_MIN]), ctrl[U_MAX])
+
+
+@_inline
+def _watch_cycle(cs, dt):
+    """Count the pressure loop's limit cycles (``CS_LC_SEEN``; :data:`LC_RATE`)."""
+    r = cs[CS_DPF]
+    sign = 1.0 if r > LC_RATE else (-1.0 if r < -LC_RATE else 0.0)
+    if sign != 0.0 and sign != cs[CS_LC_SIGN]:
+        cs[CS_LC_N] = cs[CS_LC_N] + 1.0 if (cs[CS_N] - cs[CS_LC_AT]) * dt <= LC_GAP else 1.0
+        cs[CS_LC_SIGN] = sign
+        cs[CS_LC_AT] = cs[CS_N]
+        if cs[CS_LC_N] >= LC_SWINGS:
+            cs[CS_LC_SEEN] += 1.0
+            cs[CS_LC_N] = 0.0
 
 
 @_inline
@@ -991,6 +1023,7 @@ def _launch(ctrl, cs, meas, t_ref):
     rate = 0.0 if first else (p - cs[CS_PPREV]) / dt
     cs[CS_DPF] += (rate - cs[CS_DPF]) * dt / (TAU_DP + dt)
     cs[CS_PPREV] = p
+    _watch_cycle(cs, dt)
     if cs[CS_N] * dt <= DRAG_SETTLE:
         # the torque onset is a rise above the open plates' drag: not above the start of the recording
         cs[CS_TREF] = cs[CS_TF]

@@ -546,7 +546,8 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     # the learnt kiss point, unless the launch set it aside (``_dip_drains``) and started from the design's
     kiss_start = ((start if cs[control.CS_KISS_LEARNT] != 0.0 else d.settings["p_kiss"]) if d.kind == "launch"
                   else None)
-    summary.update(kiss_start_Pa=kiss_start, kiss_found_Pa=found, hold_margin_Pa=margin)
+    summary.update(kiss_start_Pa=kiss_start, kiss_found_Pa=found, hold_margin_Pa=margin,
+                   limit_cycles_seen=int(cs[control.CS_LC_SEEN]) if d.kind == "launch" else None)
     friction = (float(cs[control.CS_THETA_LEARNT]) if d.kind == "launch" and cs[control.CS_THETA_N] >= control.THETA_LEARN_N
                 else None)
     summary.update(friction_factor_start=learnt.friction_factor(temp) if d.kind == "launch" else None,

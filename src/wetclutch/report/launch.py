@@ -24,7 +24,7 @@ def write(result: LaunchResult, out: str | Path, params: Params, runs: list[Laun
         if runs and len(runs) > 1:
             keys = ("t95_s", "t95_settled_s", "overshoot_pct", "creep_Nm", "standby_peak_Nm", "steady_state_error_pct",
                     "kiss_start_Pa", "kiss_found_Pa", "hold_margin_Pa", "friction_factor_found", "friction_slope_found",
-                    "output_inertia_found_kg_m2", "request_shaped", "all_pass")
+                    "output_inertia_found_kg_m2", "request_shaped", "limit_cycles_seen", "all_pass")
             pd.DataFrame([{"launch": i + 1, **{k: r.summary.get(k) for k in keys}} for i, r in enumerate(runs)]).to_csv(
                 d / "sequence.csv", index=False)
         result.signals.to_csv(d / "signals.csv", index=False, float_format="%.8g")
