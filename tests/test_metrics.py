@@ -85,6 +85,19 @@ def test_robustness_compares_with_nominal():
     assert not metrics.requirements(close, metrics.Response.empty())["robustness"]
 
 
+def test_a_response_faster_than_the_nominals_is_no_deterioration():
+    # a nominal launch at the clutch's capacity answers late (0.03 s + 0.1 s more to 95 %); a launch with the capacity
+    # it lacks answers 0.1 s sooner, with no more overshoot: robust, whereas one 0.06 s later than the nominal is not
+    t = _grid()
+    ref = np.where(t >= T_REQ, 100.0, 0.0)
+    late = metrics.response(t, _first_order(t, 100.0, 0.03 + 0.1 / np.log(20.0)), ref, T_REQ, None)
+    fast = metrics.response(t, _first_order(t, 100.0, 0.03), ref, T_REQ, None)
+    later = metrics.response(t, _first_order(t, 100.0, 0.03 + 0.16 / np.log(20.0)), ref, T_REQ, None)
+    assert fast.t95_settled_s < late.t95_settled_s - 0.09
+    assert metrics.requirements(fast, late)["robustness"]
+    assert not metrics.requirements(later, late)["robustness"]
+
+
 def test_t95_of_a_ramp_request_is_the_lag_behind_it():
     t = _grid()
     ref = 100.0 * np.clip((t - T_REQ) / 0.3, 0.0, 1.0)

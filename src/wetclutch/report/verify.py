@@ -27,8 +27,8 @@ _METRICS = (("steady_state_error_pct", "steady-state error [%]", metrics.REQ_ESS
 REQUIREMENT_LABELS = {
     "steady_state_error": f"steady-state error <= {metrics.REQ_ESS_PCT:g} %",
     "response_time": f"t95 (settled) < {metrics.REQ_T95_S:g} s",
-    "robustness": (f"robust: t95 within {metrics.ROBUST_DT95:g} s and overshoot at most {metrics.ROBUST_OVERSHOOT:g} "
-                   f"points of the nominal's, ripple <= {metrics.REQ_RIPPLE_PCT:g} %"),
+    "robustness": (f"robust: t95 at most {metrics.ROBUST_DT95:g} s later and overshoot at most "
+                   f"{metrics.ROBUST_OVERSHOOT:g} points above the nominal's, ripple <= {metrics.REQ_RIPPLE_PCT:g} %"),
     "standby": f"creep before the request <= {metrics.REQ_CREEP_NM:g} N m",
 }
 
