@@ -7,7 +7,7 @@ import pytest
 from wetclutch.launch import controller as control
 from wetclutch.launch import design as designs
 from wetclutch.launch import loop as launch
-from wetclutch.launch import metrics
+from wetclutch.launch import metrics, ranges, verify
 from wetclutch.launch.adaptation import Adaptation
 from wetclutch.errors import WetclutchError
 from wetclutch.params import Params
@@ -572,7 +572,7 @@ def test_a_stiffly_damped_stem_in_cold_oil_overshoots_less_with_the_cold_rate_ga
 
 def _watched(p: np.ndarray, dt: float = 1e-3) -> tuple[int, float | None]:
     """The limit-cycle watch over a measured pressure ``p`` (Pa), its rate filtered as the controller filters it:
-    the rate gain's cuts and the time (s) of the first."""
+    the cycles seen and the time (s) of the first."""
     cs = np.zeros(control.N_CS)
     first = None
     for k in range(1, len(p)):
@@ -590,8 +590,8 @@ def test_the_pressure_loops_limit_cycle_is_seen_and_a_launchs_rise_is_not():
     noise = 1e3 * rng.standard_normal(t.size)
     # the cycle a lightly damped stem runs into (85 Hz, +-2.5 bar about 4 bar): seen on its 8th swing beyond the
     # rate's threshold, some four periods in (47 ms)
-    cuts, first = _watched(4e5 + 2.5e5 * np.sin(2 * np.pi * 85.0 * t) + noise)
-    assert cuts >= 1 and 0.035 < first < 0.06, (cuts, first)
+    seen, first = _watched(4e5 + 2.5e5 * np.sin(2 * np.pi * 85.0 * t) + noise)
+    assert seen >= 1 and 0.035 < first < 0.06, (seen, first)
     # a fast rise (0.7 to 5 bar in 50 ms) with the torque dither's ripple (+-0.3 bar at 167 Hz) and a jump that
     # rings twice: never
     rise = np.interp(t, [0.05, 0.1], [0.7e5, 5e5])
@@ -619,7 +619,6 @@ def test_a_lightly_damped_stem_in_cold_oil_does_not_hold_the_pressure_loop_in_a_
     # two clutches of the shipped ranges whose stem has half the built-in rig's damping, in oil at 12-19 C: on the
     # third launch the cold oil's rate gain drove the pressure into an 85-90 Hz cycle of 1.5-6.5 bar through the slip
     # phase (a torque ripple of 24-27 %); seen, the rate gain goes, and the launch passes
-    from wetclutch.launch import ranges, verify
     d = designs.cached(Params())
     ctx = verify.Context(d, Params(), ranges.load(), sequence=3)
     plant, cond = ctx.case(verify.Sample(0, values, seed))

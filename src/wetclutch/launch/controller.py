@@ -319,8 +319,8 @@ SHORT_STROKE = 1.5
 #: time constant of the filtered derivative of the measured pressure (s): it passes the valve's own pressure
 #: oscillation (20 to 40 Hz) and smooths the sensor's noise
 TAU_DP = 0.002
-#: a limit cycle of the pressure loop: the filtered pressure's rate swings beyond +-LC_RATE (Pa/s) LC_SWINGS times
-#: in a row, each swing within LC_GAP (s) of the last. The rate gain that damps a stiffly damped stem's lag drives a
+#: a limit cycle of the pressure loop: while its rate feedback acts, the filtered pressure's rate swings beyond
+#: +-LC_RATE (Pa/s) LC_SWINGS times in a row, each swing within LC_GAP (s) of the last. The rate gain that damps a stiffly damped stem's lag drives a
 #: lightly damped one (a stem with half the default's damping in cold oil) into an 80-90 Hz cycle of several bar,
 #: whose rate swings by some 100 MPa/s; a launch's rise (up to some 20 MPa/s) and the dither's ripple stay below
 #: LC_RATE. Once a cycle is seen the rate gain is off for the rest of the launch: a cycle of that size saturates the
@@ -861,6 +861,8 @@ def _pressure_loop(ctrl, cs, p_set, p, temp, hold, dt):
         shift = ctrl[VALVE_PLAY] + (ctrl[TRAPPED_DIP] if cs[CS_TF] > ctrl[CREEP_LIMIT] else 0.0)
     # the valve regulates the pressure through a slow (damped) stem and the clutch volume, an integrator: the
     # lag of a stiffly damped stem leaves that loop underdamped, and feedback of the pressure's rate damps it
+    if not hold:
+        _watch_cycle(cs, dt)
     damp = 0.0 if hold or cs[CS_LC_SEEN] > 0.0 else rate_gain(ctrl, temp) * cs[CS_DPF]
     u = _table(ctrl, temp, p_set) - shift + cs[CS_ZP] + kp * e_p - damp
     if trapped or ((hold or cs[CS_ANSWERED] == 0.0) and cs[CS_PF] < cs[CS_KISS]):
@@ -899,7 +901,7 @@ def _dither(ctrl, cs, u, hold, high=0.0):
 
 @_inline
 def _watch_cycle(cs, dt):
-    """Count the pressure loop's limit cycles (``CS_LC_SEEN``; :data:`LC_RATE`)."""
+    """Count the pressure loop's limit cycles while its rate feedback acts (``CS_LC_SEEN``; :data:`LC_RATE`)."""
     r = cs[CS_DPF]
     sign = 1.0 if r > LC_RATE else (-1.0 if r < -LC_RATE else 0.0)
     if sign != 0.0 and sign != cs[CS_LC_SIGN]:
@@ -1023,7 +1025,6 @@ def _launch(ctrl, cs, meas, t_ref):
     rate = 0.0 if first else (p - cs[CS_PPREV]) / dt
     cs[CS_DPF] += (rate - cs[CS_DPF]) * dt / (TAU_DP + dt)
     cs[CS_PPREV] = p
-    _watch_cycle(cs, dt)
     if cs[CS_N] * dt <= DRAG_SETTLE:
         # the torque onset is a rise above the open plates' drag: not above the start of the recording
         cs[CS_TREF] = cs[CS_TF]
