@@ -575,9 +575,10 @@ def _watched(p: np.ndarray, dt: float = 1e-3) -> tuple[int, float | None]:
     the cycles seen and the time (s) of the first."""
     cs = np.zeros(control.N_CS)
     first = None
+    control._pressure_rate(cs, p[0], True, dt)
     for k in range(1, len(p)):
         cs[control.CS_N] = k
-        cs[control.CS_DPF] += ((p[k] - p[k - 1]) / dt - cs[control.CS_DPF]) * dt / (control.TAU_DP + dt)
+        control._pressure_rate(cs, p[k], False, dt)
         control._watch_cycle(cs, dt)
         if first is None and cs[control.CS_LC_SEEN] > 0:
             first = k * dt

@@ -85,10 +85,10 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       the stem is damped less than the schedule assumes and the loop runs into a limit
       cycle (:data:`LC_RATE`), the rate feedback goes for the rest of the launch.
       Friction differs from unit to unit by some 20 %; an integrator alone
-      would take too long to make that up within 0.2 s, so the controller also estimates a friction factor ``theta`` (the
-      measured torque over the nominal model's torque at the measured pressure,
-      low-pass filtered) and scales its friction law by it: an adaptive
-      feedforward. The torque in that ratio is the clutch's, ``T_r i / eta + J_1 w_1'``:
+      would take too long to make that up within 0.2 s, so the controller also
+      estimates a friction factor ``theta`` (the measured torque over the nominal
+      model's torque at the measured pressure, low-pass filtered) and scales its
+      friction law by it: an adaptive feedforward. The torque in that ratio is the clutch's, ``T_r i / eta + J_1 w_1'``:
       a heavy clutch output rings against the axle, and the axle torque's swing alone
       would drive the estimate. ``J_1`` (rarely identified) is the design's on a first
       launch and then what a launch measured (:data:`EST_N`), kept by the adaptation;
@@ -320,10 +320,10 @@ SHORT_STROKE = 1.5
 #: oscillation (20 to 40 Hz) and smooths the sensor's noise
 TAU_DP = 0.002
 #: a limit cycle of the pressure loop: while its rate feedback acts, the filtered pressure's rate swings beyond
-#: +-LC_RATE (Pa/s) LC_SWINGS times in a row, each swing within LC_GAP (s) of the last. The rate gain that damps a stiffly damped stem's lag drives a
-#: lightly damped one (a stem with half the default's damping in cold oil) into an 80-90 Hz cycle of several bar,
-#: whose rate swings by some 100 MPa/s; a launch's rise (up to some 20 MPa/s) and the dither's ripple stay below
-#: LC_RATE. Once a cycle is seen the rate gain is off for the rest of the launch: a cycle of that size saturates the
+#: +-LC_RATE (Pa/s) LC_SWINGS times in a row, each swing within LC_GAP (s) of the last. The rate gain that damps a
+#: stiffly damped stem's lag drives a lightly damped one (a stem with half the default's damping in cold oil) into an
+#: 80-90 Hz cycle of several bar, whose rate swings by some 100 MPa/s; a launch's rise (up to some 20 MPa/s) and the
+#: dither's ripple stay below LC_RATE. Once a cycle is seen the rate gain is off for the rest of the launch: a cycle of that size saturates the
 #: valve's input and goes on at a quarter of the gain that started it (on two such clutches, a gain halved at each
 #: cycle seen took four or five halvings and left the response late).
 LC_RATE = 3.0e7
@@ -900,6 +900,14 @@ def _dither(ctrl, cs, u, hold, high=0.0):
 
 
 @_inline
+def _pressure_rate(cs, p, first, dt):
+    """Filter the measured pressure's rate (``CS_DPF``, :data:`TAU_DP`) with the sample ``p``."""
+    rate = 0.0 if first else (p - cs[CS_PPREV]) / dt
+    cs[CS_DPF] += (rate - cs[CS_DPF]) * dt / (TAU_DP + dt)
+    cs[CS_PPREV] = p
+
+
+@_inline
 def _watch_cycle(cs, dt):
     """Count the pressure loop's limit cycles while its rate feedback acts (``CS_LC_SEEN``; :data:`LC_RATE`)."""
     r = cs[CS_DPF]
@@ -1022,9 +1030,7 @@ def _launch(ctrl, cs, meas, t_ref):
         for i in range(N_RECENT):
             cs[CS_RECENT + i] = p
     cs[CS_RECENT + int(cs[CS_N]) % N_RECENT] = cs[CS_PF5]
-    rate = 0.0 if first else (p - cs[CS_PPREV]) / dt
-    cs[CS_DPF] += (rate - cs[CS_DPF]) * dt / (TAU_DP + dt)
-    cs[CS_PPREV] = p
+    _pressure_rate(cs, p, first, dt)
     if cs[CS_N] * dt <= DRAG_SETTLE:
         # the torque onset is a rise above the open plates' drag: not above the start of the recording
         cs[CS_TREF] = cs[CS_TF]
