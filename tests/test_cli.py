@@ -76,6 +76,28 @@ def test_bad_input_one_line_exit_2_no_output(tmp_path, cli_refuses, args, fragme
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize(("args", "named"), [
+    (["launch", "--bogus"], "unrecognized arguments: --bogus"),
+    (["verify", "--samples", "5", "--frob", "3"], "unrecognized arguments: --frob 3"),
+    (["design", "--kiss", "1"], "unrecognized arguments: --kiss 1")])
+def test_an_unknown_option_is_named_before_a_missing_required_one(capsys, args, named):
+    # each command lacks its required --out as well: the option that does not exist is the one to name
+    with pytest.raises(SystemExit) as exc:
+        main(args)
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and len(err.strip().splitlines()) == 1 and named in err, err
+
+
+def test_a_missing_required_option_is_named_and_help_shows_it_required(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["launch"])
+    assert exc.value.code == 2 and "the following arguments are required: --out" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["launch", "--bogus", "--help"])
+    usage = capsys.readouterr().out
+    assert exc.value.code == 0 and "--out DIR" in usage and "[--out DIR]" not in usage, usage
+
+
 def test_malformed_param_file(tmp_path):
     pf = tmp_path / "bad.toml"
     pf.write_text("[driveline]\nJ_p = = 3\n")

@@ -7,6 +7,7 @@ code 2; output directories are written whole or not at all.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import shlex
@@ -31,8 +32,48 @@ MAX_SAMPLES = 1_000_000
 
 
 class _Parser(argparse.ArgumentParser):
+    _relaxed: list[argparse.Action] = []
+
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+
+    def parse_known_args(self, args=None, namespace=None):
+        # an unknown option is named before a missing required one: argparse checks the required options first, and
+        # `launch --bogus` would otherwise be told that --out is missing, not that --bogus is no option. A first pass
+        # with the required options relaxed finds what no option takes
+        relaxed = [a for a in self._actions if a.required and a.option_strings]
+        if relaxed:
+            self._relaxed = relaxed
+            for a in relaxed:
+                a.required = False
+            try:
+                _, extras = super().parse_known_args(None if args is None else list(args), argparse.Namespace())
+            finally:
+                for a in relaxed:
+                    a.required = True
+                self._relaxed = []
+            if any(x.startswith("-") for x in extras):
+                self.error(f"unrecognized arguments: {' '.join(extras)}")
+        return super().parse_known_args(args, namespace)
+
+    def format_usage(self) -> str:
+        with self._shown_required():
+            return super().format_usage()
+
+    def format_help(self) -> str:
+        with self._shown_required():
+            return super().format_help()
+
+    @contextlib.contextmanager
+    def _shown_required(self):
+        """Help asked for in the first pass shows the relaxed options as required, as they are."""
+        for a in self._relaxed:
+            a.required = True
+        try:
+            yield
+        finally:
+            for a in self._relaxed:
+                a.required = False
 
 
 def _param_args(p: argparse.ArgumentParser) -> None:
