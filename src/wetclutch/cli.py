@@ -44,36 +44,34 @@ class _Parser(argparse.ArgumentParser):
         relaxed = [a for a in self._actions if a.required and a.option_strings]
         if relaxed:
             self._relaxed = relaxed
-            for a in relaxed:
-                a.required = False
             try:
-                _, extras = super().parse_known_args(None if args is None else list(args), argparse.Namespace())
+                with self._required(False):
+                    _, extras = super().parse_known_args(None if args is None else list(args), argparse.Namespace())
             finally:
-                for a in relaxed:
-                    a.required = True
                 self._relaxed = []
             if any(x.startswith("-") for x in extras):
                 self.error(f"unrecognized arguments: {' '.join(extras)}")
         return super().parse_known_args(args, namespace)
 
     def format_usage(self) -> str:
-        with self._shown_required():
+        # help asked for in the first pass shows the relaxed options as required, as they are
+        with self._required(True):
             return super().format_usage()
 
     def format_help(self) -> str:
-        with self._shown_required():
+        with self._required(True):
             return super().format_help()
 
     @contextlib.contextmanager
-    def _shown_required(self):
-        """Help asked for in the first pass shows the relaxed options as required, as they are."""
+    def _required(self, required: bool):
+        """The relaxed options' ``required`` set to ``required`` while the block runs, then back."""
         for a in self._relaxed:
-            a.required = True
+            a.required = required
         try:
             yield
         finally:
             for a in self._relaxed:
-                a.required = False
+                a.required = not required
 
 
 def _param_args(p: argparse.ArgumentParser) -> None:

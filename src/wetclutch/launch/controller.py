@@ -323,9 +323,9 @@ TAU_DP = 0.002
 #: +-LC_RATE (Pa/s) LC_SWINGS times in a row, each swing within LC_GAP (s) of the last. The rate gain that damps a
 #: stiffly damped stem's lag drives a lightly damped one (a stem with half the default's damping in cold oil) into an
 #: 80-90 Hz cycle of several bar, whose rate swings by some 100 MPa/s; a launch's rise (up to some 20 MPa/s) and the
-#: dither's ripple stay below LC_RATE. Once a cycle is seen the rate gain is off for the rest of the launch: a cycle of that size saturates the
-#: valve's input and goes on at a quarter of the gain that started it (on two such clutches, a gain halved at each
-#: cycle seen took four or five halvings and left the response late).
+#: dither's ripple stay below LC_RATE. Once a cycle is seen the rate gain is off for the rest of the launch: a cycle
+#: of that size saturates the valve's input and goes on at a quarter of the gain that started it (on two such
+#: clutches, a gain halved at each cycle seen took four or five halvings and left the response late).
 LC_RATE = 3.0e7
 LC_GAP = 0.012
 LC_SWINGS = 8
