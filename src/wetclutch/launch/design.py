@@ -120,7 +120,7 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "ki_p": Setting("V/(Pa s)", 0.0, 1.0, "pressure loop, integral gain, once torque is requested"),
         "kd_p": Setting("V s/Pa", 0.0, 1.0, "pressure loop, gain on the pressure's rate (damping), once torque is requested"),
         "kd_p_cold": Setting("-", 0.0, 100.0, "factor on kd_p in oil at 10 C and below (1 from 30 C up, linear "
-                                              "between): the valve stem's damping grows as the oil cools"),
+                                              "between): cold oil damps the pressure less (seal leak, feed line)"),
         "kp_hold": Setting("V/Pa", 0.0, 1.0, "pressure loop, proportional gain, in the hold"),
         "ki_hold": Setting("V/(Pa s)", 0.0, 1.0, "pressure loop, integral gain, in the hold"),
         "kp_t": Setting("-", 0.0, 100.0, "torque loop, proportional gain (per nominal pressure per N m)"),
