@@ -15,8 +15,8 @@ the friction-factor estimate needs to tell the clutch's torque from the axle's, 
 taken by the next launch at any temperature. A launch whose waiting vehicle was pushed harder than the design's
 ``creep_limit`` (the mean of the measured ``T_r`` over the last 0.2 s before the request), by the plates and not only
 by the open plates' oil drag, makes the next launches in its band hold the plates :data:`MARGIN_STEP` further below
-the kiss point, up to :data:`MARGIN_MAX`: where the valve cannot hold the pressure at the kiss point (cold oil: a
-stiffly damped stem creeps into the supply port, and the pressure jumps past the plates' contact) the plates are kept
+the kiss point, up to :data:`MARGIN_MAX`: where the valve cannot hold the pressure at the kiss point (cold oil: the
+stem creeps into the supply port, and the pressure jumps past the plates' contact) the plates are kept
 apart by what the pressure wanders, at the price of a little more stroke at the request. The state is a small TOML file
 (``launch``/``verify --sequence``, ``--adaptation``).
 """

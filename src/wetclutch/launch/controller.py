@@ -44,7 +44,7 @@ settings and their design live in :mod:`wetclutch.launch.design`.
       other way round, a calm hold pressure more than ``hold_offset`` above the
       kiss point that its torque explains shows the belief too low (a contact in
       the full-input fill, found on a lagging average): it moves up to that one. A
-      pressure trapped above the hold (cold oil, a stiffly damped stem stuck in its
+      pressure trapped above the hold (cold oil, the stem stuck in its
       overlap) drains only once the magnet's force falls, after the input has crossed
       the whole play: the pressure loop then works on the falling branch of the map,
       and ``trapped_dip`` below it while the creep exceeds ``creep_limit``. Where the
