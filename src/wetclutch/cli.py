@@ -32,7 +32,7 @@ MAX_SAMPLES = 1_000_000
 
 
 class _Parser(argparse.ArgumentParser):
-    _relaxed: list[argparse.Action] = []
+    _relaxed: tuple[argparse.Action, ...] = ()
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
@@ -41,14 +41,14 @@ class _Parser(argparse.ArgumentParser):
         # an unknown option is named before a missing required one: argparse checks the required options first, and
         # `launch --bogus` would otherwise be told that --out is missing, not that --bogus is no option. A first pass
         # with the required options relaxed finds what no option takes
-        relaxed = [a for a in self._actions if a.required and a.option_strings]
+        relaxed = tuple(a for a in self._actions if a.required and a.option_strings)
         if relaxed:
             self._relaxed = relaxed
             try:
                 with self._required(False):
                     _, extras = super().parse_known_args(None if args is None else list(args), argparse.Namespace())
             finally:
-                self._relaxed = []
+                self._relaxed = ()
             if any(x.startswith("-") for x in extras):
                 self.error(f"unrecognized arguments: {' '.join(extras)}")
         return super().parse_known_args(args, namespace)
@@ -64,14 +64,15 @@ class _Parser(argparse.ArgumentParser):
 
     @contextlib.contextmanager
     def _required(self, required: bool):
-        """The relaxed options' ``required`` set to ``required`` while the block runs, then back."""
+        """The relaxed options' ``required`` set to ``required`` while the block runs, then back to what it was."""
+        before = [a.required for a in self._relaxed]
         for a in self._relaxed:
             a.required = required
         try:
             yield
         finally:
-            for a in self._relaxed:
-                a.required = not required
+            for a, was in zip(self._relaxed, before, strict=True):
+                a.required = was
 
 
 def _param_args(p: argparse.ArgumentParser) -> None:
