@@ -367,6 +367,33 @@ def test_where_the_capacity_sags_the_torque_holds_flat_a_little_below_the_reques
     assert s["ripple_pct"] <= metrics.REQ_RIPPLE_PCT and s["all_pass"]
 
 
+def test_a_torque_above_the_flat_it_holds_at_the_capacity_winds_the_torque_integrator_down():
+    # The request has risen (two stages, 150 N m); the valve's top, as the launch found it, gives the plates far less
+    # than the request at the slip the judged window ends with, so the launch aims at a flat FLAT_FLOOR of the
+    # request. An axle torque above that flat is no transient of the rising request: the torque integrator must wind
+    # down against it (judged against the request itself, the flat's lowered request counted as still rising and
+    # held the integrator, and the torque stayed above the flat until the capacity's sag pulled it down)
+    d = designs.cached(Params())
+    rec = designs.record(d, 1e-3)
+    ratio, t_ref = d.settings["ratio"], 150.0
+    cs = control.initial_state(d.settings["p_kiss"])
+    # in the torque phase 0.3 s after the request, the plates answered, the input at the top seen (the valve's top
+    # 0.5 bar above the kiss point), the slip falling at 100 rad/s^2, the axle torque at 98 % of the request
+    state = {"PHASE": control.TORQUE, "FILLED": 1.0, "ANSWERED": 1.0, "FOUND": 1.0, "THETA": 1.0, "SAT": 1.0,
+             "U": 3.0, "N": 500.0, "NREQ": 200.0, "REF": t_ref, "REF1": t_ref, "SLIPP": 100.0, "DSLIP": -100.0,
+             "PTOP": d.settings["p_kiss"] + 0.5e5, "PF": 3e5, "PF5": 3e5, "PPREV": 3e5, "TF": 0.98 * t_ref}
+    for name, v in state.items():
+        cs[getattr(control, "CS_" + name)] = v
+    meas = np.zeros(len(control.MEASURED))
+    meas[control.M_P], meas[control.M_TR], meas[control.M_TEMP] = 3e5, 0.98 * t_ref, 60.0
+    meas[control.M_WP], meas[control.M_W1], meas[control.M_RATIO] = 150.0, 50.0, ratio
+    for k in range(100):
+        slip = 100.0 - 0.1 * k  # falling at 100 rad/s^2
+        meas[control.M_WS] = (meas[control.M_WP] - slip) * ratio
+        control.step(rec, cs, meas, t_ref)
+    assert cs[control.CS_ZT] < 0.0, cs[control.CS_ZT]
+
+
 @pytest.mark.parametrize("sag, allowed", [(0.05, True), (0.14, True), (0.15, False)])
 def test_a_capacity_that_sags_allows_a_launch_while_a_flat_top_meets_the_error_and_the_ripple(sag, allowed):
     # Over the judged window the plates, at the valve's highest pressure, carry 1.2 times the request r in its first

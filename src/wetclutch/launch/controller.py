@@ -818,7 +818,9 @@ def _torque_setpoint(ctrl, cs, meas, t_ref, dt, p_hold):
         p_set = min(p_set, cs[CS_PF] + ctrl[REQ_LEAD])
     u_prev = cs[CS_U]
     waiting = gated or cs[CS_ANSWERED] == 0.0
-    rising = r < (1.0 - REF_RISING) * t_ref
+    # (the shaped request, not the one lowered to the capacity: a flat below the request is where the torque
+    # must settle, and a torque above it is no transient)
+    rising = cs[CS_REF] < (1.0 - REF_RISING) * t_ref
     at_top = u_prev >= ctrl[U_MAX] and e_t > 0.0
     # nor does the torque integrator wind up against plates that do not touch yet, nor down while the shaped
     # request still rises: a torque ahead of it there is the plates' contact jolt or the clutch output ringing,
