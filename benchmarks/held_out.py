@@ -7,7 +7,8 @@ adaptation carried over, on seeds that no setting was chosen on, and gives per s
 - the pass rate of all requirements on the third launch, with its 95 % interval (Wilson's);
 - the same on the first launch;
 - the third launch's rate without the samples that fail whatever the controller (the request beyond the clutch's
-  capacity, or the open plates' drag alone creeping beyond the limit: ``verify.unreachable``);
+  capacity, the open plates' drag alone creeping beyond the limit, or a fill that the valve wide open does not
+  complete within the response time after the request: ``verify.unreachable``);
 - how many samples are beyond the capacity;
 
 and the means over the seeds; then what the samples that fail after three launches fail, over all seeds: each

@@ -315,6 +315,14 @@ def test_the_plates_touch_no_sooner_than_the_full_input_fill_allows():
     fastest = launch.fastest_contact(p, warm)
     assert fastest is not None and fastest < w["contact_s"]
     assert launch.fastest_contact(slow, cold) is None
+    # wide open from the start, the cold plates touch after the request but within the response time (0.12 s): a
+    # launch could still answer in time, and this one, touching later, is the controller's; with a feed line twice
+    # as long they touch only 0.49 s after it, and no launch answers in time
+    late = launch.fastest_contact(slow, cold, metrics.REQ_T95_S)
+    assert late is not None and 0.0 < late < c["contact_s"]
+    slower = params_load(base=slow, overrides={"hydraulics.line_length": 2.0 * p.hydraulics.line_length})
+    assert launch.fastest_contact(slower, cold, metrics.REQ_T95_S) is None
+    assert launch.fastest_contact(slower, cold, 1.0) > metrics.REQ_T95_S
 
 
 def test_a_request_beyond_the_clutchs_capacity_shows_the_valve_input_at_its_top():

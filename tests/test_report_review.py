@@ -38,7 +38,8 @@ def _row(i: int, corner: bool, ok: bool = True, first: bool = True, slams: int =
     req = {k: ok or k != "response_time" for k in metrics.REQUIREMENTS}
     return {"index": i, "corner": corner, "seed": i, "values": {"kiss": kiss, "request": 60.0 + i}, "metrics": m,
             "requirements": req, "all_pass": ok, "first_all_pass": first, "slams": slams, "fill_too_slow": False,
-            "creep_of_the_drag": False, "beyond_capacity": False, "error": None, "replay": f"wetclutch launch --seed {i}"}
+            "fill_after_response": False, "creep_of_the_drag": False, "beyond_capacity": False, "error": None,
+            "replay": f"wetclutch launch --seed {i}"}
 
 
 def verification(sequence: int = 1, kind: str = "launch", n: int = 20) -> dict[str, Any]:

@@ -34,7 +34,8 @@ def _row(i: int, corner: bool, overshoot: float, ok: bool = True, first: bool = 
              t_sync_s=2.0 + 0.1 * i if lockup else None, slip_energy_J=1000.0 + 10.0 * i if lockup else None)
     return {"index": i, "corner": corner, "seed": i, "values": {"kiss": 0.0, "request": 60.0 + i}, "metrics": m,
             "requirements": {k: ok for k in metrics.REQUIREMENTS}, "all_pass": ok, "first_all_pass": first,
-            "slams": slams, "fill_too_slow": False, "creep_of_the_drag": False, "beyond_capacity": False,
+            "slams": slams, "fill_too_slow": False, "fill_after_response": False, "creep_of_the_drag": False,
+            "beyond_capacity": False,
             "error": None, "replay": f"wetclutch launch --seed {i}"}
 
 

@@ -151,7 +151,8 @@ def test_the_pass_rate_is_the_random_samples_and_the_corners_stand_beside_it():
     rows = [{"index": i, "corner": i < 8, "values": {r.name: r.low for r in rs}, "metrics": shaky.get(i, figures),
              "slams": 0,
              "requirements": {k: ok for k in metrics.REQUIREMENTS}, "all_pass": ok, "first_all_pass": i % 2 == 0,
-             "fill_too_slow": i == 44, "creep_of_the_drag": i in (40, 41), "beyond_capacity": i in (42, 43),
+             "fill_too_slow": i in (44, 45), "fill_after_response": i == 45, "creep_of_the_drag": i in (40, 41),
+             "beyond_capacity": i in (42, 43),
              "replay": ""}
             for i, ok in enumerate([True] * 2 + [False] * 6 + [True] * 30 + [False] * 10)]
     res = verify.summarize(rows, ctx, seed=0, n=40)
@@ -163,8 +164,10 @@ def test_the_pass_rate_is_the_random_samples_and_the_corners_stand_beside_it():
     assert res["pass_rate_all_cases"] == 32 / 48
     assert (res["rippling"], res["oscillating"]) == (4, 2)
     assert res["failures_creep_of_the_drag"] == 2 and res["failures_beyond_capacity"] == 2
-    # without the 4 random samples no controller passes (40-43; 44 only filled late), 30 of 36
-    assert res["pass_rate_reachable"] == 30 / 36
+    assert res["failures_fill_too_slow"] == 2 and res["failures_fill_after_response"] == 1
+    # without the 5 random samples no controller passes (40-43, and 45, whose fastest fill ends after the response
+    # time; 44's only after the request), 30 of 35
+    assert res["pass_rate_reachable"] == 30 / 35
     # Wilson's score interval, z the normal distribution's 97.5 % quantile
     z, n, p = 1.959963985, 40, 0.75
     mid, half = (p + z**2 / (2 * n)) / (1 + z**2 / n), z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / (1 + z**2 / n)

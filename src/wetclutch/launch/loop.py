@@ -588,20 +588,22 @@ def nominal_response(d: design_.Design, cond: Conditions) -> metrics.Response:
     return _NOMINAL[key]
 
 
-def _open_loop(params: Params, conditions: Conditions, u: float) -> Trajectory:
-    """The plant with the valve input held at ``u`` from the start up to the request (no controller)."""
+def _open_loop(params: Params, conditions: Conditions, u: float, after: float = 0.0) -> Trajectory:
+    """The plant with the valve input held at ``u`` from the start up to ``after`` (s) past the request (no
+    controller)."""
     cond = conditions.checked()
     temp = params.rig.oil_temp_C if cond.oil_temp_C is None else float(cond.oil_temp_C)
-    return clutch.run(params, u, cond.t_request, temp_C=temp, dt_out=cond.dt, rtol=cond.rtol, atol=ATOL)[1]
+    return clutch.run(params, u, cond.t_request + after, temp_C=temp, dt_out=cond.dt, rtol=cond.rtol, atol=ATOL)[1]
 
 
-def fastest_contact(params: Params, conditions: Conditions) -> float | None:
+def fastest_contact(params: Params, conditions: Conditions, within: float = 0.0) -> float | None:
     """When the plates first touch (s from the request, negative before it) with the valve input at the top of its
-    range from the start: the fastest fill the valve gives, whatever the controller. None: not before the
-    request, so that no controller fills this clutch before torque is asked for."""
-    tr = _open_loop(params, conditions, design_.INPUT_RANGE["dc"][1])
+    range from the start: the fastest fill the valve gives, whatever the controller. None: not up to ``within`` (s)
+    after the request, so that no controller fills this clutch by then (``within`` 0: before torque is asked for;
+    the response time asked for: no launch of this clutch answers in time)."""
+    tr = _open_loop(params, conditions, design_.INPUT_RANGE["dc"][1], within)
     contact = metrics.first_contact(tr.t, tr.clutch_torque("clutch"), conditions.t_request)
-    return contact if contact is not None and contact <= 0.0 else None
+    return contact if contact is not None and contact <= within else None
 
 
 def open_plates_creep(params: Params, conditions: Conditions) -> float:

@@ -164,8 +164,11 @@ def run_sample(ctx: Context, sample: Sample, grid: tuple[np.ndarray, np.ndarray]
     late = not all(req.values()) and (figures.get("contact_s") or 0.0) > 0.0
     try:
         too_slow = late and launch.fastest_contact(plant, cond) is None
+        # nor within the response time after it: the torque can rise only once the plates touch, so no launch of
+        # this clutch answers in time
+        too_late = too_slow and launch.fastest_contact(plant, cond, metrics.REQ_T95_S) is None
     except WetclutchError:
-        too_slow = False  # the open-loop fill failed to simulate: unknown, so not counted
+        too_slow = too_late = False  # the open-loop fill failed to simulate: unknown, so not counted
     # a failed standby: would the plates held open from the start have pushed the waiting vehicle as hard?
     try:
         drag = not req["standby"] and launch.open_plates_creep(plant, cond) > metrics.REQ_CREEP_NM
@@ -180,15 +183,17 @@ def run_sample(ctx: Context, sample: Sample, grid: tuple[np.ndarray, np.ndarray]
         beyond = False  # the valve's highest pressure failed to simulate: unknown, so not counted
     return {"index": sample.index, "corner": sample.corner, "seed": sample.seed, "values": sample.values,
             "metrics": figures, "requirements": req, "all_pass": all(req.values()), "first_all_pass": first,
-            "slams": slams, "fill_too_slow": too_slow, "creep_of_the_drag": drag, "beyond_capacity": beyond,
+            "slams": slams, "fill_too_slow": too_slow, "fill_after_response": too_late, "creep_of_the_drag": drag,
+            "beyond_capacity": beyond,
             "error": error, "replay": ctx.replay(sample, plant, cond)}
 
 
 def unreachable(row: dict[str, Any]) -> bool:
-    """Whether a sample fails whatever the controller: its request beyond the clutch's capacity, or the open plates'
-    drag alone creeping beyond the limit. (A fill that the valve wide open does not complete before the request is
-    not counted: a response can still make its time after it.)"""
-    return bool(row["beyond_capacity"] or row["creep_of_the_drag"])
+    """Whether a sample fails whatever the controller: its request beyond the clutch's capacity, the open plates'
+    drag alone creeping beyond the limit, or plates that the valve wide open from the start touches only the
+    response time asked for after the request or later. (A fill that the valve wide open does not complete before
+    the request, but sooner than that after it, is not counted: a response can still make its time.)"""
+    return bool(row["beyond_capacity"] or row["creep_of_the_drag"] or row["fill_after_response"])
 
 
 _SHARED: tuple[Context, tuple[np.ndarray, np.ndarray]] | None = None
@@ -448,6 +453,9 @@ def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int) ->
         # of those, the ones whose valve wide open from the start would not have filled the clutch before the
         # request either: no controller fills them in time
         "failures_fill_too_slow": sum(1 for r in results if r["fill_too_slow"]),
+        # and of those, the ones it would not have filled within the response time after the request: no launch
+        # answers in time
+        "failures_fill_after_response": sum(1 for r in results if r["fill_after_response"]),
         "failures_creep_of_the_drag": sum(1 for r in results if r["creep_of_the_drag"]),
         # failures where the controller asked for all the valve gives: the clutch at or beyond its capacity
         "failures_at_capacity": sum(1 for r in results if not r["all_pass"]

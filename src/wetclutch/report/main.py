@@ -241,8 +241,9 @@ def _report_md(job: MainJob, summary: dict[str, Any], plant: str = "") -> str:
            "last launch, " if ver["sequence"] > 1 else "each launched once, ")
         + f"the launch controller meets every requirement in **{headline(ver)}** (the corners: every combination of "
         f"the corner ranges' extremes); {100 * ver['pass_rate_reachable']:.1f} % of the random clutches that some controller "
-        "can pass (without those whose request is beyond the clutch's capacity or whose open plates' drag alone "
-        "creeps beyond the limit). " + (_first_launch_md(ver) + " " if ver["sequence"] > 1 else "") + "On the same "
+        "can pass (without those whose request is beyond the clutch's capacity, whose open plates' drag alone "
+        "creeps beyond the limit, or whose fill the valve wide open does not complete within the response time "
+        "after the request). " + (_first_launch_md(ver) + " " if ver["sequence"] > 1 else "") + "On the same "
         f"{plural(same['samples'], 'sample')} it meets them in {100 * same['design']:.1f} %, "
         "the baseline (timed fill, "
         # a baseline file designed on another plant was not tuned on this one: the mismatch is what is verified

@@ -226,7 +226,8 @@ def verify_table(result: dict[str, Any]) -> str:
                   "after the request: the fill was not complete when torque was asked for, and the response time "
                   f"counts the rest of it ({result['failures_fill_too_slow']} of them would not have been filled in "
                   "time with the valve wide open from the start either: no controller fills those before the "
-                  "request); "
+                  f"request, and {result['failures_fill_after_response']} not within the response time after it: "
+                  "no controller answers those in time); "
                   f"{result['failures_at_capacity']} had the valve input at the top of its range and the torque "
                   f"short of the request in at least {verify.CAPACITY_SHARE:g} % of the judged window: the "
                   "controller asked for all the valve gives, the clutch at or beyond its capacity there (supply "
@@ -237,7 +238,8 @@ def verify_table(result: dict[str, Any]) -> str:
                   f"{result['failures_creep_of_the_drag']} crept beyond {metrics.REQ_CREEP_NM:g} N m where the open "
                   "plates' oil drag alone, with the valve input at the bottom of its range from the start, pushes "
                   "the waiting vehicle as hard: no controller holds those within the limit. Without the random "
-                  "clutches that fail whatever the controller (those beyond the capacity or creeping by the drag), "
+                  "clutches that fail whatever the controller (those beyond the capacity, creeping by the drag or "
+                  "not filled within the response time), "
                   f"{_pct(result['pass_rate_reachable'])} pass.", ""]
     if result["samples"]:
         lines += [f"Of the {plural(result['samples'], 'random clutch', 'random clutches')}, {result['rippling']} "
@@ -365,7 +367,8 @@ def write(result: dict[str, Any], out: str | Path, design: Design, plant: Params
                  # the first launch's verdict and the slams of a sequence: the figures verify.md states about them
                  # can then be recomputed from this file alone
                  "first_all_pass": r["first_all_pass"], "slams": r["slams"], "fill_too_slow": r["fill_too_slow"],
-                 "creep_of_the_drag": r["creep_of_the_drag"], "beyond_capacity": r["beyond_capacity"]}
+                 "fill_after_response": r["fill_after_response"], "creep_of_the_drag": r["creep_of_the_drag"],
+                 "beyond_capacity": r["beyond_capacity"]}
                 for r in result["results"]]
         pd.DataFrame(rows).to_csv(d / "samples.csv", index=False)
         plot_histograms(result, d / "histograms.png")
