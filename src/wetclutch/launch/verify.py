@@ -163,10 +163,12 @@ def run_sample(ctx: Context, sample: Sample, grid: tuple[np.ndarray, np.ndarray]
     # the clutch in time? (only then is the late fill the controller's)
     late = not all(req.values()) and (figures.get("contact_s") or 0.0) > 0.0
     try:
-        too_slow = late and launch.fastest_contact(plant, cond) is None
-        # nor within the response time after it: the torque can rise only once the plates touch, so no launch of
-        # this clutch answers in time
-        too_late = too_slow and launch.fastest_contact(plant, cond, metrics.REQ_T95_S) is None
+        # one open-loop fill on to the response time after the request answers both: not before the request, and
+        # not within the response time after it either (the torque rises only once the plates touch, so no launch
+        # of this clutch answers in time)
+        fastest = launch.fastest_contact(plant, cond, metrics.REQ_T95_S) if late else 0.0
+        too_slow = late and (fastest is None or fastest > 0.0)
+        too_late = late and fastest is None
     except WetclutchError:
         too_slow = too_late = False  # the open-loop fill failed to simulate: unknown, so not counted
     # a failed standby: would the plates held open from the start have pushed the waiting vehicle as hard?
