@@ -35,8 +35,7 @@ def _row(i: int, corner: bool, overshoot: float, ok: bool = True, first: bool = 
     return {"index": i, "corner": corner, "seed": i, "values": {"kiss": 0.0, "request": 60.0 + i}, "metrics": m,
             "requirements": {k: ok for k in metrics.REQUIREMENTS}, "all_pass": ok, "first_all_pass": first,
             "slams": slams, "fill_too_slow": False, "fill_after_response": False, "creep_of_the_drag": False,
-            "beyond_capacity": False,
-            "error": None, "replay": f"wetclutch launch --seed {i}"}
+            "beyond_capacity": False, "error": None, "replay": f"wetclutch launch --seed {i}"}
 
 
 def verification(sequence: int = 1, lockup: bool = False, n: int = 20, kind: str = "launch") -> dict[str, Any]:

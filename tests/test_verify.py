@@ -152,8 +152,7 @@ def test_the_pass_rate_is_the_random_samples_and_the_corners_stand_beside_it():
              "slams": 0,
              "requirements": {k: ok for k in metrics.REQUIREMENTS}, "all_pass": ok, "first_all_pass": i % 2 == 0,
              "fill_too_slow": i in (44, 45), "fill_after_response": i == 45, "creep_of_the_drag": i in (40, 41),
-             "beyond_capacity": i in (42, 43),
-             "replay": ""}
+             "beyond_capacity": i in (42, 43), "replay": ""}
             for i, ok in enumerate([True] * 2 + [False] * 6 + [True] * 30 + [False] * 10)]
     res = verify.summarize(rows, ctx, seed=0, n=40)
     assert res["pass_rate"] == 0.75 and res["pass_rate_first_launch"] == 0.5

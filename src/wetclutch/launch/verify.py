@@ -166,7 +166,7 @@ def run_sample(ctx: Context, sample: Sample, grid: tuple[np.ndarray, np.ndarray]
         # one open-loop fill on to the response time after the request answers both: not before the request, and
         # not within the response time after it either (the torque rises only once the plates touch, so no launch
         # of this clutch answers in time)
-        fastest = launch.fastest_contact(plant, cond, metrics.REQ_T95_S) if late else 0.0
+        fastest = launch.fastest_contact(plant, cond, metrics.REQ_T95_S) if late else None
         too_slow = late and (fastest is None or fastest > 0.0)
         too_late = late and fastest is None
     except WetclutchError:
@@ -186,8 +186,7 @@ def run_sample(ctx: Context, sample: Sample, grid: tuple[np.ndarray, np.ndarray]
     return {"index": sample.index, "corner": sample.corner, "seed": sample.seed, "values": sample.values,
             "metrics": figures, "requirements": req, "all_pass": all(req.values()), "first_all_pass": first,
             "slams": slams, "fill_too_slow": too_slow, "fill_after_response": too_late, "creep_of_the_drag": drag,
-            "beyond_capacity": beyond,
-            "error": error, "replay": ctx.replay(sample, plant, cond)}
+            "beyond_capacity": beyond, "error": error, "replay": ctx.replay(sample, plant, cond)}
 
 
 def unreachable(row: dict[str, Any]) -> bool:
