@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import subprocess
-import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import pytest
 
 import wetclutch as wc
+from inprocess import invoke
 
 REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference"
 
@@ -28,8 +28,7 @@ def engage_default() -> wc.Result:
 
 
 def _refused(args: Sequence[str], fragment: str, out: Path) -> subprocess.CompletedProcess:
-    r = subprocess.run([sys.executable, "-m", "wetclutch", *args, "--out", str(out)],
-                       capture_output=True, text=True, check=False)
+    r = invoke([*args, "--out", str(out)])
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and fragment in lines[0], r.stderr

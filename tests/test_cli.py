@@ -5,16 +5,30 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from inprocess import invoke
 from wetclutch.cli import main
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "wetclutch", *args], capture_output=True, text=True)
+    return invoke(args)
+
+
+@pytest.mark.parametrize("entry", ["python -m wetclutch", "console script"])
+def test_a_new_process_refuses_bad_input_in_one_line_with_exit_2(tmp_path, entry):
+    # the other command-line tests run the same main() in the test's process (tests/inprocess.py)
+    exe = ([sys.executable, "-m", "wetclutch"] if entry == "python -m wetclutch"
+           else [str(Path(sys.executable).with_name("wetclutch"))])
+    r = subprocess.run([*exe, "launch", "--oil-temp", "900", "--out", str(tmp_path / "never")], capture_output=True,
+                       text=True, timeout=120)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and "--oil-temp" in lines[0], r.stderr
+    assert r.stdout == "" and not (tmp_path / "never").exists()
 
 
 def test_simulate_engage_writes_outputs(tmp_path, engage_default):
@@ -270,8 +284,7 @@ def test_out_that_cannot_be_replaced_is_refused_before_any_work(tmp_path, args, 
     cwd = tmp_path / "work"
     cwd.mkdir()
     (cwd / "keep").write_text("mine")
-    r = subprocess.run([sys.executable, "-m", "wetclutch", *args, "--out", out], capture_output=True, text=True,
-                       cwd=cwd, timeout=60)
+    r = invoke([*args, "--out", out], cwd=cwd)
     lines = r.stderr.strip().splitlines()
     assert r.returncode == 2 and len(lines) == 1 and fragment in lines[0], r.stderr
     # neither a temporary nor an .old directory, and the directory's content untouched

@@ -19,8 +19,6 @@ figures.
 
 from __future__ import annotations
 
-import subprocess
-import sys
 import zipfile
 from pathlib import Path
 
@@ -30,6 +28,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
+from inprocess import invoke
 from wetclutch import params
 from wetclutch.errors import WetclutchError
 from wetclutch.launch import Conditions, metrics, simulate
@@ -40,8 +39,7 @@ DT = 1e-3
 
 
 def _export(out: Path, *args: str) -> Path:
-    r = subprocess.run([sys.executable, "-m", "wetclutch", "export-fmu", "--out", str(out), *args],
-                       capture_output=True, text=True, check=False)
+    r = invoke(["export-fmu", "--out", str(out), *args])
     assert r.returncode == 0, r.stderr
     return out
 

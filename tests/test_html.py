@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +18,7 @@ import pytest
 from PIL import Image
 from playwright.sync_api import Page, sync_playwright
 
+from inprocess import invoke
 from wetclutch import params
 from wetclutch.launch.metrics import REQUIREMENTS
 from wetclutch.report import rig as rig_report
@@ -29,7 +28,7 @@ CHROMIUM = "/usr/bin/chromium"
 
 
 def _cli(*args: str) -> None:
-    r = subprocess.run([sys.executable, "-m", "wetclutch", *args], capture_output=True, text=True, check=False)
+    r = invoke(args)
     assert r.returncode == 0, r.stderr
 
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +15,7 @@ from hypothesis import strategies as st
 from scipy import io as sio
 from scipy import signal
 
+from inprocess import invoke
 from wetclutch import ident, params
 from wetclutch.ident import dynamics, onset
 from wetclutch.ident.friction import measured_ratio
@@ -575,7 +575,7 @@ def test_random_corruptions_never_crash(small_csv, tmp_path_factory, ext, kind, 
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "wetclutch", *args], capture_output=True, text=True)
+    return invoke(args)
 
 
 def test_cli_identify_writes_outputs_and_a_loadable_param_file(rig_data, tmp_path):

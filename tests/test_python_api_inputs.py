@@ -28,6 +28,17 @@ def refused(call, *fragments):
     return msg
 
 
+@given(text=st.text(max_size=12))
+def test_an_error_quoting_any_name_is_one_line_that_names_it(text):
+    # a name read from the user's file (a column, a key) may hold any line break str.splitlines knows
+    msg = str(WetclutchError(f"column '{text}' is unknown"))
+    assert len(msg.splitlines()) == 1 and msg.startswith("column '") and msg.endswith("' is unknown")
+    # every character of the name that is not a line break is shown, in its order
+    kept = (c for c in text if len(f"a{c}b".splitlines()) == 1)
+    rest = iter(msg[len("column '"):])
+    assert all(c in rest for c in kept)
+
+
 @pytest.fixture(scope="module")
 def d():
     return designs.cached(wc.Params(), "launch")

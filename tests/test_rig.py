@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
+from inprocess import invoke
 from wetclutch.report import rig as rig_report
 from wetclutch.rig import experiments as rig
 from wetclutch.rig import files as measurement
@@ -78,8 +77,7 @@ def test_bad_rig_options(tmp_path, cli_refuses, args, fragment):
 
 def test_calibration_report_cli(tmp_path):
     out = tmp_path / "cal"
-    r = subprocess.run([sys.executable, "-m", "wetclutch", "calibration-report", "--out", str(out)],
-                       capture_output=True, text=True)
+    r = invoke(["calibration-report", "--out", str(out)])
     assert r.returncode == 0, r.stderr
     rep = json.loads((out / "report.json").read_text())
     assert rep["total"] == 10 and all("published" in f and "simulated" in f for f in rep["figures"])

@@ -9,8 +9,20 @@ from typing import Any
 import numpy as np
 
 
+#: the characters at which ``str.splitlines`` breaks a line, each with the escape an error message shows instead
+_LINE_BREAKS = str.maketrans({c: repr(c)[1:-1] for c in "\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"})
+
+
 class WetclutchError(Exception):
-    """A user-facing error: bad input, a bad file, or a simulation that cannot run."""
+    """A user-facing error: bad input, a bad file, or a simulation that cannot run.
+
+    Its message is one line: a line break inside a name it quotes from the user's input (a column name, a key of a
+    file) shows as its escape (``\\n``)."""
+
+    def __init__(self, *args: object) -> None:
+        if len(args) == 1 and isinstance(args[0], str):
+            args = (args[0].translate(_LINE_BREAKS),)
+        super().__init__(*args)
 
 
 class ParameterError(WetclutchError, ValueError):
