@@ -22,6 +22,7 @@ import tomli_w
 from hypothesis import given, settings as hsettings
 from hypothesis import strategies as st
 
+from inprocess import invoke
 from wetclutch import output
 from wetclutch.cli import main
 from wetclutch.errors import WetclutchError
@@ -218,6 +219,16 @@ def _refused(capsys, args, fragment):
     assert main(args) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and fragment in err, err
+
+
+@hsettings(max_examples=60, deadline=None)
+@given(text=st.text(min_size=1, max_size=8), where=st.sampled_from(["option", "choice", "command", "setting"]))
+def test_any_text_where_an_option_belongs_is_refused_in_one_line(text, where):
+    # argparse's own messages quote the user's token as typed: a line break in it must not break the line
+    args = {"option": ["launch", f"--x{text}", "--out", "o"], "choice": ["launch", "--controller", f"x{text}"],
+            "command": [f"x{text}"], "setting": ["launch", "--set", f"x{text}=1", "--out", "o"]}[where]
+    r = invoke(args)
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1 and r.stdout == "", r.stderr
 
 
 def test_an_out_that_is_a_file_is_refused_before_any_work(tmp_path, capsys, no_work):

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import NoReturn
 
 from . import params as params_mod
-from .errors import COMMAND_LINE, WetclutchError
+from .errors import COMMAND_LINE, WetclutchError, one_line
 from .output import check_out_dir, check_target
 from .plant.scenarios import SCENARIOS, simulate
 from .report.text import plural
@@ -35,7 +35,7 @@ class _Parser(argparse.ArgumentParser):
     _relaxed: tuple[argparse.Action, ...] = ()
 
     def error(self, message: str) -> NoReturn:
-        self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {one_line(message)}\n")
 
     def parse_known_args(self, args=None, namespace=None):
         # an unknown option is named before a missing required one: argparse checks the required options first, and

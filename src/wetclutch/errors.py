@@ -21,8 +21,13 @@ class WetclutchError(Exception):
 
     def __init__(self, *args: object) -> None:
         if len(args) == 1 and isinstance(args[0], str):
-            args = (args[0].translate(_LINE_BREAKS),)
+            args = (one_line(args[0]),)
         super().__init__(*args)
+
+
+def one_line(text: str) -> str:
+    """``text`` with each line break (any at which ``str.splitlines`` breaks) shown as its escape (``\\n``)."""
+    return text.translate(_LINE_BREAKS)
 
 
 class ParameterError(WetclutchError, ValueError):
