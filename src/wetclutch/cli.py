@@ -703,10 +703,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         # Ctrl-C or a termination signal: what was half written is gone (outputs are written whole or not at all)
         signum = err.signum if isinstance(err, Interrupted) else signal.SIGINT
         out = getattr(args, "out", None)
-        print(f"wetclutch: interrupted ({signal.Signals(signum).name})"
-              + (f"; '{out}' not written" if out is not None else "")
-              + (f"; --state '{args.state}' holds the search up to its last finished generation, if any"
-                 if getattr(args, "state", None) else ""), file=sys.stderr)
+        print(one_line(f"wetclutch: interrupted ({signal.Signals(signum).name})"
+                       + (f"; '{out}' not written" if out is not None else "")
+                       + (f"; --state '{args.state}' holds the search up to its last finished generation, if any"
+                          if getattr(args, "state", None) else "")), file=sys.stderr)
         return EXIT_SIGNAL + int(signum)
     finally:
         for sig, handler in before.items():
