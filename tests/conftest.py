@@ -14,6 +14,26 @@ from inprocess import invoke
 REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference"
 
 
+@pytest.hookimpl(trylast=True)  # after the terminal reporter's, whose writer says what the pause is
+def pytest_configure(config: pytest.Config) -> None:
+    """With pytest-xdist's workers (``-n``), compile the numba core once in the controlling process before they start:
+    on a cold cache every worker would otherwise compile the same functions into the same cache at the same time."""
+    if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
+        return
+    from wetclutch.launch import Conditions
+    from wetclutch.launch import simulate as launch
+    from wetclutch.rig import experiments as rig
+
+    config.get_terminal_writer().line("compiling the numba core once for the workers (a minute or two on a cold cache)")
+    try:
+        wc.simulate("engage")
+        rig.run("step", input_mode="pwm", t_end=1.5)
+        for kind in ("launch", "baseline"):
+            launch(wc.Params(), kind, Conditions(t_max=1.6))
+    except Exception:  # a broken core fails its own tests, by their names, not the whole session here
+        pass
+
+
 @pytest.fixture(scope="session")
 def reference() -> Path:
     """The shared reference data (../shared/reference beside the checkout); missing data fails."""
