@@ -402,6 +402,29 @@ def test_a_torque_above_the_flat_it_holds_at_the_capacity_winds_the_torque_integ
     assert cs[control.CS_ZT] < 0.0, cs[control.CS_ZT]
 
 
+@pytest.mark.parametrize("found", [False, True])
+def test_a_request_before_contact_starts_from_the_pressure_not_from_a_belief_the_search_raised(found):
+    # In the hold the search has raised the believed kiss point 0.3 bar above the filtered pressure with no torque yet
+    # (the piston still strokes behind a cold feed line); the request comes. A kiss point not yet found is believed at
+    # most REQ_KISS above the pressure from then on; one that was found stays where it was found.
+    d = designs.cached(Params())
+    rec = designs.record(d, 1e-3)
+    p0 = d.settings["p_kiss"] - 0.05e5
+    kiss = p0 + 0.3e5
+    cs = control.initial_state(d.settings["p_kiss"])
+    state = {"PHASE": control.HOLD, "FILLED": 1.0, "FOUND": 1.0 if found else 0.0, "KISS": kiss, "N": 900.0,
+             "PF": p0, "PF5": p0, "PPREV": p0, "TF": 3.0, "TREF": 3.0, "TMIN": 3.0, "PSET": kiss, "STROKE": 1.0}
+    for name, v in state.items():
+        cs[getattr(control, "CS_" + name)] = v
+    meas = np.zeros(len(control.MEASURED))
+    meas[control.M_P], meas[control.M_TR], meas[control.M_TEMP] = p0, 3.0, 15.0
+    meas[control.M_WP], meas[control.M_RATIO] = 150.0, d.settings["ratio"]
+    control.step(rec, cs, meas, 50.0)
+    assert cs[control.CS_PHASE] == control.TORQUE
+    expected = kiss if found else p0 + control.REQ_KISS
+    assert cs[control.CS_KISS] == pytest.approx(expected, abs=1.0)
+
+
 @pytest.mark.parametrize("sag, allowed", [(0.05, True), (0.14, True), (0.15, False)])
 def test_a_capacity_that_sags_allows_a_launch_while_a_flat_top_meets_the_error_and_the_ripple(sag, allowed):
     # Over the judged window the plates, at the valve's highest pressure, carry 1.2 times the request r in its first
