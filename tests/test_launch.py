@@ -536,17 +536,37 @@ def test_a_valve_stem_released_below_the_integrations_resolution_is_held_not_rel
     assert r.summary["steady_state_error_pct"] < 10.0
 
 
-def test_a_torque_ahead_of_the_rising_request_does_not_hold_the_response_back():
+@pytest.mark.parametrize("shaped_share, winds_down", [(0.5, False), (1.0, True)])
+def test_a_torque_ahead_of_the_rising_request_does_not_wind_the_torque_integrator_down(shaped_share, winds_down):
+    # The plates' contact jolt (or a heavy clutch output ringing) puts the axle torque at 105 % of the request while
+    # the shaped request is at half of it: a transient the request is on its way to. A torque integrator wound down against
+    # it holds the pressure short afterwards (a cold launch's settled t95 0.249-0.295 s against 0.176-0.226 s); it
+    # waits until the shaped request is within REF_RISING of the request, and winds down against a torque ahead of
+    # the risen request as before.
+    d = designs.cached(Params())
+    rec = designs.record(d, 1e-3)
+    t_ref = 150.0
+    cs = control.initial_state(d.settings["p_kiss"])
+    p = d.settings["p_kiss"] + 1.0e5
+    state = {"PHASE": control.TORQUE, "FILLED": 1.0, "ANSWERED": 1.0, "FOUND": 1.0, "THETA": 1.0, "U": 2.5,
+             "N": 1100.0, "NREQ": 1000.0, "REF": shaped_share * t_ref, "REF1": shaped_share * t_ref, "PF": p,
+             "PF5": p, "PPREV": p, "TF": 1.05 * t_ref, "ZT": 0.1e5, "PTOP": 8e5}
+    for name, v in state.items():
+        cs[getattr(control, "CS_" + name)] = v
+    meas = np.zeros(len(control.MEASURED))
+    meas[control.M_P], meas[control.M_TR], meas[control.M_TEMP] = p, 1.05 * t_ref, 60.0
+    meas[control.M_WP], meas[control.M_RATIO] = 150.0, d.settings["ratio"]
+    meas[control.M_WS] = 100.0 * d.settings["ratio"]
+    control.step(rec, cs, meas, t_ref)
+    assert bool(cs[control.CS_ZT] < 0.1e5) is winds_down, cs[control.CS_ZT]
+
+
+def test_a_cold_launch_whose_plates_touch_as_the_request_comes_settles_in_time():
     # cold oil, a heavy clutch output, a prestress of 0.79 bar (the built-in rig's 0.5) and a 20 % longer stroke: the
-    # plates touch as the request comes and the axle torque jumps past 95 % of the request within 0.1 s while the
-    # shaped request is at half of it. A torque integrator wound down against that jolt holds the pressure short
-    # afterwards; it waits until the shaped request is within 5 % of the request. Over five noise seeds the settled
-    # t95 is 0.176-0.226 s, 0.202 s on average (measured); with the integrator winding down it was 0.249-0.295 s,
-    # 0.281 s on average. One seed alone sits near the 0.2 s limit either way, so the mean over the five is judged.
-    # An earlier launch has measured the output (as light as the design's), so that the request takes the two stages:
-    # through a first launch's S-curve the jolt stays below 95 % of the request (t95 0.16-0.17 s). The jolt comes
-    # with the warm oil's rate gain in the pressure loop (kd_p_cold = 1); the cold oil's gain damps it (t95 0.11-0.16
-    # s, settled 0.164-0.196 s, 0.181 s on average, measured)
+    # plates touch 0.012-0.028 s after the request. An earlier launch has measured the output (as light as the
+    # design's), so that the request takes the two stages. Over five noise seeds the settled t95 is 0.14-0.18 s
+    # (measured), 0.164-0.196 s before the request started from the filtered pressure rather than from the belief the
+    # search had raised; one seed alone may sit near the 0.2 s limit, so the mean over the five is judged
     plant = params_load(overrides={
         "hydraulics.p_prestress": 78700.0, "hydraulics.x_contact": 1.647e-3, "friction.mu_scale": 1.03,
         "friction.mu_slope": 0.808, "hydraulics.p_supply": 7.0e5, "hydraulics.leak_85C": 3.5e-12,
@@ -554,17 +574,14 @@ def test_a_torque_ahead_of_the_rising_request_does_not_hold_the_response_back():
         "hydraulics.air_fraction": 0.0043, "driveline.ratio": 0.60, "driveline.eta": 0.914, "driveline.k_a": 493.0,
         "engage.T_load": 28.4})
     d = designs.design(Params())
-    settled = {}
-    for k in (1.0, d.settings["kd_p_cold"]):
-        settled[k] = []
-        for seed in range(1, 6):
-            cond = launch.Conditions(t_ref=157.6, oil_temp_C=11.6, seed=seed, noise_scale=1.155)
-            s = launch.simulate(plant, designs.with_settings(d, kd_p_cold=k), cond, nominal=metrics.Response.empty(),
-                                adaptation=Adaptation(inertia=Params().driveline.J_1)).summary
-            assert (s["t95_s"] < 0.1) == (k == 1.0), (k, s["t95_s"])
-            settled[k].append(s["t95_settled_s"])
-    assert sum(settled[1.0]) / 5 < 1.1 * metrics.REQ_T95_S, settled
-    assert sum(settled[d.settings["kd_p_cold"]]) / 5 < metrics.REQ_T95_S, settled
+    settled = []
+    for seed in range(1, 6):
+        cond = launch.Conditions(t_ref=157.6, oil_temp_C=11.6, seed=seed, noise_scale=1.155)
+        s = launch.simulate(plant, d, cond, nominal=metrics.Response.empty(),
+                            adaptation=Adaptation(inertia=Params().driveline.J_1)).summary
+        assert 0.0 < s["contact_s"] < 0.05, s["contact_s"]
+        settled.append(s["t95_settled_s"])
+    assert sum(settled) / 5 < metrics.REQ_T95_S, settled
 
 
 def test_a_launch_and_a_design_show_their_figures_not_their_arrays():
