@@ -24,7 +24,6 @@ from hypothesis import strategies as st
 
 from inprocess import invoke
 from wetclutch import output
-from wetclutch.cli import main
 from wetclutch.errors import WetclutchError
 from wetclutch.launch import adaptation, design, ranges, tune
 from wetclutch.launch import settings as files
@@ -215,10 +214,9 @@ def no_work(monkeypatch):
         monkeypatch.setattr(name, work)
 
 
-def _refused(capsys, args, fragment):
-    assert main(args) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and fragment in err, err
+def _refused(args, fragment):
+    r = invoke(args)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and fragment in r.stderr, r.stderr
 
 
 @hsettings(max_examples=60, deadline=None)
@@ -231,28 +229,28 @@ def test_any_text_where_an_option_belongs_is_refused_in_one_line(text, where):
     assert r.returncode == 2 and len(r.stderr.splitlines()) == 1 and r.stdout == "", r.stderr
 
 
-def test_an_out_that_is_a_file_is_refused_before_any_work(tmp_path, capsys, no_work):
+def test_an_out_that_is_a_file_is_refused_before_any_work(tmp_path, no_work):
     afile = tmp_path / "afile"
     afile.write_text("mine")
     ctrl = tmp_path / "c.toml"
     ctrl.write_text(TEXT)
-    _refused(capsys, ["verify", "--samples", "1", "--controller-file", str(ctrl), "--out", str(afile)],
+    _refused(["verify", "--samples", "1", "--controller-file", str(ctrl), "--out", str(afile)],
              "is a file, not a directory")
-    _refused(capsys, ["launch", "--controller-file", str(ctrl), "--out", str(afile / "sub")],
+    _refused(["launch", "--controller-file", str(ctrl), "--out", str(afile / "sub")],
              f"'{afile}' is a file, not a directory")
     assert afile.read_text() == "mine"
 
 
-def test_tune_refuses_no_held_out_plants_and_a_state_inside_its_output_before_the_search(tmp_path, capsys, no_work):
+def test_tune_refuses_no_held_out_plants_and_a_state_inside_its_output_before_the_search(tmp_path, no_work):
     ctrl = tmp_path / "c.toml"
     ctrl.write_text(TEXT)
     out = tmp_path / "t"
     base = ["tune", "--controller-file", str(ctrl), "--samples", "2", "--generations", "1", "--popsize", "2",
             "--out", str(out)]
-    _refused(capsys, [*base, "--heldout-samples", "0"], "--heldout-samples must be >= 1")
+    _refused([*base, "--heldout-samples", "0"], "--heldout-samples must be >= 1")
     out.mkdir()
     # the output directory is replaced as a whole at the end: a state inside it would go with it
-    _refused(capsys, [*base, "--heldout-samples", "1", "--state", str(out / "state.pkl")],
+    _refused([*base, "--heldout-samples", "1", "--state", str(out / "state.pkl")],
              "lies inside --out")
 
 
@@ -260,11 +258,11 @@ def test_tune_refuses_no_held_out_plants_and_a_state_inside_its_output_before_th
     ("time;t_ref\n0;50\n1;60\n", "--profile", "needs numeric columns 'time' and 't_ref'"),
     ("band_C = 10.0\n", "--adaptation", "band_C must be 20"),
 ], ids=["profile", "adaptation"])
-def test_launch_reads_its_profile_and_adaptation_before_designing(tmp_path, capsys, no_work, content, option,
+def test_launch_reads_its_profile_and_adaptation_before_designing(tmp_path, no_work, content, option,
                                                                   fragment):
     f = tmp_path / "input.file"
     f.write_text(content)
-    _refused(capsys, ["launch", option, str(f), "--out", str(tmp_path / "l")], fragment)
+    _refused(["launch", option, str(f), "--out", str(tmp_path / "l")], fragment)
 
 
 # --- outputs -----------------------------------------------------------------------------------------------------------
@@ -326,13 +324,13 @@ def test_a_relative_range_on_a_parameter_that_is_zero_says_it_varies_nothing():
     assert len(notes) == 1 and notes[0].startswith("mu_temp (thermal.mu_temp, rel) varies nothing on this plant")
 
 
-def test_an_adaptation_whose_kiss_point_the_plant_cannot_reach_is_refused(tmp_path, capsys, no_work):
+def test_an_adaptation_whose_kiss_point_the_plant_cannot_reach_is_refused(tmp_path, no_work):
     # learnt on another clutch or hand-edited: a kiss point of 49 bar on a supply of 8 bar had the controller hold
     # the valve open for a contact that never came, the plates slammed shut before the request (creep 230 N m)
     a = tmp_path / "a.toml"
     a.write_text(tomli_w.dumps({"band_C": 20.0, "band": [{"from_C": 70.0, "to_C": 90.0, "kiss_Pa": 4.9e6,
                                                           "launches": 2}]}))
-    _refused(capsys, ["launch", "--adaptation", str(a), "--out", str(tmp_path / "l")],
+    _refused(["launch", "--adaptation", str(a), "--out", str(tmp_path / "l")],
              "band 70..90 C: kiss_Pa 4.9e+06 Pa is not below the highest pressure the plant's supply gives")
 
 
@@ -341,12 +339,12 @@ _BAD_RANGES = "[fill]\ntarget = 'hydraulics.x_contact'\nhow = 'abs'\nlow = 0.7\n
 
 @pytest.mark.parametrize("command", [["verify", "--samples", "1"], ["report", "--samples", "1"],
                                      ["tune", "--samples", "2", "--heldout-samples", "1"]])
-def test_ranges_that_leave_the_physical_range_are_refused_before_the_design(tmp_path, capsys, no_work, command):
+def test_ranges_that_leave_the_physical_range_are_refused_before_the_design(tmp_path, no_work, command):
     # they were found by the verification itself: after the design (minutes on a new plant) and, for the main job,
     # after its twelve nominal launches
     r = tmp_path / "r.toml"
     r.write_text(_BAD_RANGES)
-    _refused(capsys, [*command, "--ranges", str(r), "--out", str(tmp_path / "o")],
+    _refused([*command, "--ranges", str(r), "--out", str(tmp_path / "o")],
              "range [fill] at 0.7 leaves the plant's physical range")
 
 
@@ -362,19 +360,19 @@ def test_the_main_job_refuses_its_ranges_before_the_nominal_launches(monkeypatch
                           baseline_samples=0, workers=1)
 
 
-def test_a_negative_held_out_seed_is_named_as_such(tmp_path, capsys, no_work):
+def test_a_negative_held_out_seed_is_named_as_such(tmp_path, no_work):
     # it was "--seed must be >= 0" while --seed was 0
-    _refused(capsys, ["tune", "--heldout-seed", "-1", "--out", str(tmp_path / "t")], "--heldout-seed must be >= 0")
+    _refused(["tune", "--heldout-seed", "-1", "--out", str(tmp_path / "t")], "--heldout-seed must be >= 0")
 
 
 @pytest.mark.parametrize("command", [["design", "--param-file", "{d}/params.toml"],
                                      ["verify", "--controller-file", "{d}/params.toml"],
                                      ["identify", "{d}/params.toml"]], ids=["design", "verify", "identify"])
-def test_an_input_inside_the_output_directory_is_refused(tmp_path, capsys, no_work, command):
+def test_an_input_inside_the_output_directory_is_refused(tmp_path, no_work, command):
     # the output replaces its directory as a whole: `design --param-file ident/params.toml --out ident` deleted the
     # identification, `identify runs/*/measured.mf4 --out runs` the recordings
     d = tmp_path / "d"
     d.mkdir()
     (d / "params.toml").write_text("[driveline]\nratio = 0.6\n")
-    _refused(capsys, [*(a.format(d=d) for a in command), "--out", str(d)], "lies inside --out")
+    _refused([*(a.format(d=d) for a in command), "--out", str(d)], "lies inside --out")
     assert (d / "params.toml").exists()
