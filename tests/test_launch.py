@@ -250,11 +250,12 @@ def test_the_requests_s_curve_is_the_raised_cosine_of_a_step():
     assert designs.record(designs.cached(Params()), 1e-4)[control.REF_N] == 10 * m
 
 
-@pytest.mark.parametrize("j_1, ratio", [(0.001, 0.4), (0.001, 1.0), (0.02, 0.45), (0.004, 0.5), (0.004, 0.6)])
+@pytest.mark.parametrize("j_1, ratio", [(0.001, 0.4), (0.001, 1.0), (0.02, 0.45), (0.004, 0.5), (0.004, 0.65),
+                                        (0.004, 0.7)])
 def test_the_request_takes_the_s_curve_where_the_clutch_output_rings(j_1, ratio):
-    # the output's mode on the axle's side, J_1 / i^2 on k_a with d_a, is underdamped where d_a i / (2 sqrt(k_a J_1))
-    # is below 1: never for the built-in rig's output (1 g m^2) over the ratios 0.4-1 (below 0.28 only), for one 4
-    # times heavier below a ratio of 0.55, for one 20 times heavier below 1.24
+    # the output's mode on the axle's side, J_1 / i^2 on k_a with d_a, has the damping ratio d_a i / (2 sqrt(k_a J_1));
+    # the request is shaped below 1.2 of it: never for the built-in rig's output (1 g m^2) over the ratios 0.4-1
+    # (below 0.33 only), for one 4 times heavier below a ratio of 0.665, for one 20 times heavier below 1.49
     d = designs.cached(Params())
     ctrl = designs.record(d, 1e-3)
     cs = np.zeros(control.N_CS)
@@ -263,7 +264,7 @@ def test_the_request_takes_the_s_curve_where_the_clutch_output_rings(j_1, ratio)
     meas[control.M_RATIO] = ratio
     k_a, d_a = Params().driveline.k_a, Params().driveline.d_a
     zeta = d_a * ratio / (2.0 * np.sqrt(k_a * j_1))
-    assert control._rings(ctrl, cs, meas) == (zeta < 1.0)
+    assert control._rings(ctrl, cs, meas) == (zeta < 1.2)
 
 
 def test_a_heavy_clutch_output_measured_on_an_earlier_launch_settles_in_time_with_the_s_curve():
