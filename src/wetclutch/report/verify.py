@@ -196,6 +196,20 @@ def percentiles_md(result: dict[str, Any]) -> str:
     return "\n".join(lines).rstrip("\n")
 
 
+def nominal_md(result: dict[str, Any]) -> list[str]:
+    """Markdown lines: the request levels whose nominal launch did not settle and the level whose response the
+    robustness requirement took there instead (none: every nominal launch settled)."""
+    nom = result.get("nominal") or {}
+    moved = [(a, b) for a, b in zip(nom.get("request_Nm", []), nom.get("taken_from_Nm", [])) if a != b]
+    if not moved:
+        return []
+    where = "; ".join(f"at {a:g} N m that of {b:g} N m" for a, b in moved)
+    return [f"The design's nominal launch on its own clutch does not settle at every request level (it synchronises "
+            "before the judged window, as with a light primary flywheel or an overdrive CVT ratio, or the request is "
+            "beyond that clutch's capacity): the robustness requirement compares with the nominal response of the "
+            f"nearest level that settles, {where}.", ""]
+
+
 def verify_table(result: dict[str, Any]) -> str:
     """Markdown: pass rates, the launches per clutch, metric percentiles (random samples and corners apart), worst
     cases."""
@@ -210,6 +224,7 @@ def verify_table(result: dict[str, Any]) -> str:
              "| requirement | pass rate |", "|---|---|"]
     lines += [f"| {REQUIREMENT_LABELS[k]} | {_pct(rate.get(k))} |" for k in metrics.REQUIREMENTS]
     lines += [f"| **all** | **{_pct(result['pass_rate'])}** |", ""]
+    lines += nominal_md(result)
     if result.get("horizon_s") is not None:
         lines += [f"Each launch ran to {result['horizon_s']:g} s after the request, past the window the requirements "
                   "judge, not to lock-up: lock-up times and slip energies are not part of this run "
