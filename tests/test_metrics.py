@@ -59,6 +59,19 @@ def test_window_ends_before_synchronisation():
     assert r.steady_state_error_pct == pytest.approx(0.0, abs=1e-3)
 
 
+def test_an_early_lock_up_is_judged_over_the_last_window_before_it():
+    # lock-up 0.44 s after the request: 0.04 s of the usual window is left; the last 0.1 s before t_sync - 0.1 s
+    # starts 0.24 s after the request, once the 0.2 s allowed for the response are over
+    t = _grid()
+    y = _first_order(t, 100.0, 0.02)
+    r = metrics.response(t, y, np.where(t >= T_REQ, 100.0, 0.0), T_REQ, t_sync=1.44)
+    assert r.window == pytest.approx((1.24, 1.34))
+    assert r.steady_state_error_pct == pytest.approx(100.0 * np.mean(np.exp(-(t[(t >= 1.24) & (t <= 1.34)] - 1.0)
+                                                                           / 0.02)), rel=0.05)
+    assert r.t95_settled_s == pytest.approx(0.02 * np.log(20.0), abs=5 * DT)  # the band judged on a centred mean
+    assert all(metrics.requirements(r, r).values())
+
+
 def test_no_steady_state_when_synchronised_at_once():
     t = _grid()
     r = metrics.response(t, _first_order(t, 100.0, 0.02), np.where(t >= T_REQ, 100.0, 0.0), T_REQ, t_sync=1.35)

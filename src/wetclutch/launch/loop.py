@@ -641,7 +641,7 @@ def capacity_allows(params: Params, result: LaunchResult) -> bool:
     sig, tr = result.signal_columns, result.truth_columns
     win = (sig["time"] >= w0) & (sig["time"] <= w1)
     ref = float(np.mean(sig["t_ref"][win])) if np.any(win) else 0.0
-    if w1 - w0 < metrics.MIN_WINDOW or not ref > 0.0:
+    if not metrics.judged_window(w0, w1) or not ref > 0.0:
         return True  # no steady state to judge
     p_max = clutch.static_pressure(params, design_.INPUT_RANGE["dc"][1], temp_C=result.summary["oil_temp_C"])
     pressed = _pressed(tr["p_clutch"], params)

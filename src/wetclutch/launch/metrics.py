@@ -7,7 +7,10 @@ synchronisation):
 steady window
     ``[t_req + STEADY_START, min(t_req + STEADY_END, t_sync - 0.1 s)]``: after the response,
     before synchronisation ends the slip phase; one definition for every controller.
-    Shorter than :data:`MIN_WINDOW` (a request so large that the clutch synchronises at
+    Where an early lock-up leaves less than :data:`MIN_WINDOW` of it (a light primary
+    flywheel, an overdrive ratio, a large request), the last :data:`MIN_WINDOW` before
+    ``t_sync - 0.1 s``, if that starts no earlier than :data:`REQ_T95_S` after the request,
+    when the response time allowed is over. Shorter still (a clutch that synchronises at
     once): no steady state, the steady-state requirement fails.
 static value ``T_ss``
     Mean of ``T_r`` over the steady window.
@@ -196,14 +199,23 @@ def _settled(t: np.ndarray, T_r: np.ndarray, after: np.ndarray, T_ss: float, w0:
     return float(t[later[0]] - t_start) if later.size else np.inf
 
 
+def judged_window(w0: float, w1: float) -> bool:
+    """Whether a steady window ``[w0, w1]`` (s) is long enough to judge: :data:`MIN_WINDOW` or more (an early
+    lock-up's window of exactly that length, less the rounding of its ends, included)."""
+    return w1 - w0 >= MIN_WINDOW - 1e-9
+
+
 def response(t: np.ndarray, T_r: np.ndarray, t_ref: np.ndarray, t_req: float, t_sync: float | None,
              noise: float | None = None) -> Response:
     """Figures of the response of ``T_r`` to the request ``t_ref`` made at ``t_req``; ``noise``: the standard
     deviation of the reading's white noise where the sensor's is known, else :func:`noise_std` estimates it."""
     t_end = t[-1] if t_sync is None else t_sync
     w0, w1 = t_req + STEADY_START, min(t_req + STEADY_END, t_end - 0.1)
+    if not judged_window(w0, w1):
+        # an early lock-up: the last MIN_WINDOW before it, if that starts once the response time allowed is over
+        w0 = max(w1 - MIN_WINDOW, t_req + REQ_T95_S)
     waiting = standby(t, T_r, t_req)
-    if w1 - w0 < MIN_WINDOW:
+    if not judged_window(w0, w1):
         return Response.empty(waiting, (w0, w1))
     win = (t >= w0) & (t <= w1)
     T_ss = float(np.mean(T_r[win]))
