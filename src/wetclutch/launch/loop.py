@@ -457,7 +457,8 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
         Request, profile, oil temperature, noise seed.
     nominal
         The nominal launch's response, for the robustness requirement (default: the
-        design on its own plant at that plant's oil temperature, same request).
+        design on its own plant at that plant's oil temperature, interpolated between
+        request levels as a verification judges it, :func:`nominal_grid`).
     adaptation
         What the launch controller learnt on earlier launches (default: nothing); the
         result carries the state after this launch.
@@ -529,7 +530,7 @@ def simulate(params: Params | None = None, controller: design_.Design | str = "l
     t_sync = tr.sync_time("clutch")
     resp = metrics.response(signals["time"], signals["T_r"], t_ref[:m], cond.t_request, t_sync, torque_noise(cond))
     if nominal is None:
-        nominal = nominal_response(d, cond)
+        nominal = nominal_at(nominal_grid(d, cond.profile), cond.t_ref)
     summary = metrics.summary(resp, nominal, slip_energy=float(truth["E_clutch"][-1]), t_sync=t_sync,
                               contact=metrics.first_contact(tr.t, truth["T_c"], cond.t_request),
                               input_max=metrics.input_at_max(signals["time"], signals["u"], ctrl[control.U_MAX],
@@ -576,8 +577,8 @@ def torque_noise(cond: Conditions) -> float:
 
 
 def nominal_response(d: design_.Design, cond: Conditions) -> metrics.Response:
-    """The response of the design on its own plant (that plant's oil temperature, no noise seed change, same
-    request): what the robustness requirement compares a launch with."""
+    """The response of the design on its own plant (that plant's oil temperature, no noise seed change) to ``cond``'s
+    request: one level of :func:`nominal_grid`, what the robustness requirement compares a launch with."""
     c = replace(cond, oil_temp_C=None, seed=0)
     key = (d.key(), c)
     if key not in _NOMINAL:
@@ -586,6 +587,54 @@ def nominal_response(d: design_.Design, cond: Conditions) -> metrics.Response:
         _NOMINAL[key] = metrics.response(sig["time"], sig["T_r"], sig["t_ref"], c.t_request, res.summary["t_sync_s"],
                                          torque_noise(c))
     return _NOMINAL[key]
+
+
+#: the request levels (N m) of the nominal launches a launch is judged against, interpolated between
+#: (:func:`nominal_grid`)
+NOMINAL_LEVELS = np.array([25.0, 50.0, 100.0, 150.0, 200.0])
+#: the nominal responses at :data:`NOMINAL_LEVELS`: settled t95 (s), overshoot (%), and the level (N m) whose
+#: nominal launch each was taken from (:func:`nominal_grid`)
+Grid = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def nominal_grid(design: design_.Design, profile: str = "step") -> Grid:
+    """Settled t95 and overshoot of the design's nominal launch at :data:`NOMINAL_LEVELS` (interpolated between);
+    a CSV profile, which gives the request itself, has one nominal launch for every level.
+
+    A level whose nominal launch does not settle takes the response of the nearest level that does
+    (:func:`held_where_settled`): the design's own clutch synchronises before the judged window (a light primary
+    flywheel or an overdrive CVT ratio at the largest requests) or cannot hold the request, while a sampled clutch
+    (a lower ratio, more capacity) does; its launch is judged against the nominal's response where the nominal
+    settles, not failed for the nominal's sake."""
+    if profile not in PROFILES:
+        rows = [nominal_response(design, Conditions(profile=profile))] * len(NOMINAL_LEVELS)
+    else:
+        rows = [nominal_response(design, Conditions(t_ref=float(lv), profile=profile))
+                for lv in NOMINAL_LEVELS]
+    return held_where_settled(np.array([r.t95_settled_s for r in rows]), np.array([r.overshoot_pct for r in rows]))
+
+
+def held_where_settled(t95: np.ndarray, overshoot: np.ndarray) -> Grid:
+    """The nominal responses at :data:`NOMINAL_LEVELS`, each level whose settled t95 is not finite (the launch never
+    settled) taking the t95 and overshoot of the nearest level that settled, the lower one on a tie; the third
+    array names the level each was taken from. With no level settled, all stay as they are (no launch passes the
+    robustness requirement against them)."""
+    t95, overshoot = np.array(t95, dtype=float), np.array(overshoot, dtype=float)
+    source = NOMINAL_LEVELS.copy()
+    settled = np.flatnonzero(np.isfinite(t95))
+    if settled.size:
+        for i in np.flatnonzero(~np.isfinite(t95)):
+            j = settled[np.argmin(np.abs(settled - i) + 0.5 * (settled > i))]
+            t95[i], overshoot[i], source[i] = t95[j], overshoot[j], NOMINAL_LEVELS[j]
+    return t95, overshoot, source
+
+
+def nominal_at(grid: Grid, t_ref: float) -> metrics.Response:
+    """The nominal response a launch of request ``t_ref`` (N m) is judged against: ``grid`` (:func:`nominal_grid`)
+    interpolated between its levels."""
+    t95 = float(np.interp(t_ref, NOMINAL_LEVELS, grid[0]))
+    ovs = float(np.interp(t_ref, NOMINAL_LEVELS, grid[1]))
+    return replace(metrics.Response.empty(), t95_settled_s=t95, overshoot_pct=ovs)
 
 
 def _open_loop(params: Params, conditions: Conditions, u: float, after: float = 0.0) -> Trajectory:

@@ -66,8 +66,8 @@ static value ``T_ss``
     the plates' first contact (reported, not judged).
 robustness
     The launch's response compared with the nominal launch (the design on its own plant,
-    that plant's oil temperature, same request; a verification interpolates between request
-    levels, :func:`wetclutch.launch.verify.nominal_grid`): ``t95_settled`` at most :data:`ROBUST_DT95`
+    that plant's oil temperature, same request, interpolated between request levels:
+    :func:`wetclutch.launch.loop.nominal_grid`): ``t95_settled`` at most :data:`ROBUST_DT95`
     later than the nominal's, an overshoot at most :data:`ROBUST_OVERSHOOT` percentage points
     above the nominal's, and a ripple at most :data:`REQ_RIPPLE_PCT`. A faster response, as
     less overshoot, is no deterioration: where the nominal launch is itself at the clutch's

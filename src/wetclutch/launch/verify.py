@@ -42,8 +42,8 @@ from . import loop as launch
 from . import metrics
 from . import ranges as ranges_mod
 from .design import Design
+from .loop import NOMINAL_LEVELS, Grid, nominal_at, nominal_grid
 
-NOMINAL_LEVELS = np.array([25.0, 50.0, 100.0, 150.0, 200.0])
 #: a launch whose torque peaks above this multiple of the steady value slams
 SLAM_FACTOR = 1.5
 #: how long after the request a verification launch runs (s), unless it is run through lock-up: past the end of the
@@ -120,51 +120,6 @@ def samples(ctx: Context, n: int, seed: int, corners: bool = True) -> list[Sampl
     for _ in range(n):
         out.append(Sample(len(out), ranges_mod.draw(ctx.ranges, rng), int(rng.integers(2**31))))
     return out
-
-
-#: the nominal responses at :data:`NOMINAL_LEVELS`: settled t95 (s), overshoot (%), and the level (N m) whose
-#: nominal launch each was taken from (:func:`nominal_grid`)
-Grid = tuple[np.ndarray, np.ndarray, np.ndarray]
-
-
-def nominal_grid(design: Design, profile: str = "step") -> Grid:
-    """Settled t95 and overshoot of the design's nominal launch at :data:`NOMINAL_LEVELS` (interpolated between);
-    a CSV profile, which gives the request itself, has one nominal launch for every level.
-
-    A level whose nominal launch does not settle takes the response of the nearest level that does
-    (:func:`held_where_settled`): the design's own clutch synchronises before the judged window (a light primary
-    flywheel or an overdrive CVT ratio at the largest requests) or cannot hold the request, while a sampled clutch
-    (a lower ratio, more capacity) does; its launch is judged against the nominal's response where the nominal
-    settles, not failed for the nominal's sake."""
-    if profile not in launch.PROFILES:
-        rows = [launch.nominal_response(design, launch.Conditions(profile=profile))] * len(NOMINAL_LEVELS)
-    else:
-        rows = [launch.nominal_response(design, launch.Conditions(t_ref=float(lv), profile=profile))
-                for lv in NOMINAL_LEVELS]
-    return held_where_settled(np.array([r.t95_settled_s for r in rows]), np.array([r.overshoot_pct for r in rows]))
-
-
-def held_where_settled(t95: np.ndarray, overshoot: np.ndarray) -> Grid:
-    """The nominal responses at :data:`NOMINAL_LEVELS`, each level whose settled t95 is not finite (the launch never
-    settled) taking the t95 and overshoot of the nearest level that settled, the lower one on a tie; the third
-    array names the level each was taken from. With no level settled, all stay as they are (no launch passes the
-    robustness requirement against them)."""
-    t95, overshoot = np.array(t95, dtype=float), np.array(overshoot, dtype=float)
-    source = NOMINAL_LEVELS.copy()
-    settled = np.flatnonzero(np.isfinite(t95))
-    if settled.size:
-        for i in np.flatnonzero(~np.isfinite(t95)):
-            j = settled[np.argmin(np.abs(settled - i) + 0.5 * (settled > i))]
-            t95[i], overshoot[i], source[i] = t95[j], overshoot[j], NOMINAL_LEVELS[j]
-    return t95, overshoot, source
-
-
-def nominal_at(grid: Grid, t_ref: float) -> metrics.Response:
-    """The nominal response a launch of request ``t_ref`` (N m) is judged against: ``grid`` (:func:`nominal_grid`)
-    interpolated between its levels."""
-    t95 = float(np.interp(t_ref, NOMINAL_LEVELS, grid[0]))
-    ovs = float(np.interp(t_ref, NOMINAL_LEVELS, grid[1]))
-    return replace(metrics.Response.empty(), t95_settled_s=t95, overshoot_pct=ovs)
 
 
 def run_sample(ctx: Context, sample: Sample, grid: Grid) -> dict[str, Any]:
@@ -440,7 +395,7 @@ def percentiles(results: list[dict[str, Any]]) -> dict[str, dict[str, float]]:
 def summarize(results: list[dict[str, Any]], ctx: Context, seed: int, n: int,
               grid: Grid | None = None) -> dict[str, Any]:
     """Pass rates (overall, per requirement, per range bin), metric percentiles and the worst cases; with ``grid``
-    (:func:`nominal_grid`) the nominal responses the robustness requirement compared with."""
+    (:func:`wetclutch.launch.loop.nominal_grid`) the nominal responses the robustness requirement compared with."""
     total = len(results)
 
     def badness(r: dict[str, Any]) -> float:
