@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from wetclutch.launch import design as designs
-from wetclutch.launch import metrics, ranges, verify
+from wetclutch.launch import loop, metrics, ranges, verify
 from wetclutch.params import Params, load
 from wetclutch.report import main as main_report
 from wetclutch.report import tune as tune_report
@@ -232,3 +232,17 @@ def test_the_sample_table_names_each_range_column_with_what_its_values_are():
     cols = {r.name: value_column({"name": r.name, "how": r.how, "unit": r.unit}) for r in ranges.load()}
     assert cols["kiss_point"] == "kiss_point_offset_Pa" and cols["fill_volume"] == "fill_volume_factor"
     assert cols["oil_temp"] == "oil_temp_C" and cols["request"] == "request_Nm" and cols["cvt_ratio"] == "cvt_ratio"
+
+
+def test_the_verification_says_where_the_nominal_was_taken_from_another_request_level():
+    nan = float("nan")
+    rows = verification()["results"]
+    ctx = SimpleNamespace(design=SimpleNamespace(kind="launch"), ranges=ranges.parse(RANGES), limited=(),
+                          sequence=1, through_lockup=False)
+    moved = verify.summarize(rows, ctx, 0, 20, loop.held_where_settled([0.15, 0.15, 0.15, nan, nan], [2.0] * 5))
+    assert moved["nominal"]["taken_from_Nm"] == [25.0, 50.0, 100.0, 100.0, 100.0]
+    text = verify_report.verify_table(moved)
+    assert "at 150 N m that of 100 N m; at 200 N m that of 100 N m" in text
+    # every level settled: nothing to say
+    own = verify.summarize(rows, ctx, 0, 20, loop.held_where_settled([0.15] * 5, [2.0] * 5))
+    assert "does not settle" not in verify_report.verify_table(own)
