@@ -306,7 +306,8 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
         raise WetclutchError(f"nothing to verify: {named('n', '--samples')} is 0 (no random samples) and there are "
                              f"no corner cases ({why})")
     # the design's nominal responses, made once here and inherited by the forked workers
-    _SHARED = (ctx, nominal_grid(design, profile))
+    grid = nominal_grid(design, profile)
+    _SHARED = (ctx, grid)
     results: list[dict[str, Any]] = []
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
@@ -316,7 +317,7 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
         task = bar.add_task("verify", total=len(cases), ctrl=design.kind)
         address = distributed.scheduler_address(scheduler)
         if address is not None and cases:
-            one = functools.partial(run_sample, ctx, grid=_SHARED[1])
+            one = functools.partial(run_sample, ctx, grid=grid)
             results = distributed.map_batches(one, cases, address, warm=functools.partial(_warm, one, cases[0]),
                                               on_batch=lambda k: bar.advance(task, k))
         elif workers == 1 or len(cases) < 2:
@@ -330,7 +331,7 @@ def run(design: Design, plant: Params | None = None, n: int = 1000, seed: int = 
                 for r in pool.map(_worker, cases, chunksize=max(1, len(cases) // (workers * 20))):
                     results.append(r)
                     bar.advance(task)
-    return summarize(results, ctx, seed, n, _SHARED[1])
+    return summarize(results, ctx, seed, n, grid)
 
 
 def _interval(passed: int, n: int) -> list[float] | None:
