@@ -665,10 +665,12 @@ def test_the_pressure_loops_limit_cycle_is_seen_and_a_launchs_rise_is_not():
     t = np.arange(0.0, 0.3, 1e-3)
     rng = np.random.default_rng(3)
     noise = 1e3 * rng.standard_normal(t.size)
-    # the cycle a lightly damped stem runs into (85 Hz, +-2.5 bar about 4 bar): seen on its 8th swing beyond the
-    # rate's threshold, some four periods in (47 ms)
+    # the cycle a lightly damped stem runs into (85 Hz, +-2.5 bar about 4 bar): seen on its 4th swing beyond the
+    # rate's threshold, some one and a half periods in (18 ms)
     seen, first = _watched(4e5 + 2.5e5 * np.sin(2 * np.pi * 85.0 * t) + noise)
-    assert seen >= 1 and 0.035 < first < 0.06, (seen, first)
+    assert seen >= 1 and 0.012 < first < 0.03, (seen, first)
+    # one as small as the dither's ripple (+-0.5 bar): its rate stays within the threshold
+    assert _watched(4e5 + 0.5e5 * np.sin(2 * np.pi * 85.0 * t) + noise)[0] == 0
     # a fast rise (0.7 to 5 bar in 50 ms) with the torque dither's ripple (+-0.3 bar at 167 Hz) and a jump that
     # rings twice: never
     rise = np.interp(t, [0.05, 0.1], [0.7e5, 5e5])
