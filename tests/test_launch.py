@@ -669,7 +669,7 @@ def test_the_pressure_loops_limit_cycle_is_seen_and_a_launchs_rise_is_not():
     # rate's threshold, some one and a half periods in (18 ms)
     seen, first = _watched(4e5 + 2.5e5 * np.sin(2 * np.pi * 85.0 * t) + noise)
     assert seen >= 1 and 0.012 < first < 0.03, (seen, first)
-    # one as small as the dither's ripple (+-0.5 bar): its rate stays within the threshold
+    # a swing of +-0.5 bar at the same frequency: its rate (some 27 MPa/s) stays within the threshold
     assert _watched(4e5 + 0.5e5 * np.sin(2 * np.pi * 85.0 * t) + noise)[0] == 0
     # a fast rise (0.7 to 5 bar in 50 ms) with the torque dither's ripple (+-0.3 bar at 167 Hz) and a jump that
     # rings twice: never
